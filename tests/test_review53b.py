@@ -70,16 +70,22 @@ def test_column_scales_of_ordinary_columns_reads_them_no_more_than_their_rms(mon
     np.testing.assert_allclose(s, [np.sqrt(np.mean(A[:, 0] ** 2)), 1.0, 1e200], rtol=1e-14)
 
 
+def _positive_input_plant(n: int = 40, square: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """u uniform on [1, 2] and y(k) = 0.5 y(k-1) + 0.3 u(k-1) + square · u(k-1)² + 0.001 e(k) (seed 3)."""
+    rng = np.random.default_rng(3)
+    u = rng.uniform(1, 2, n)
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.5 * y[k - 1] + 0.3 * u[k - 1] + square * u[k - 1] ** 2 + 0.001 * rng.standard_normal()
+    return u, y
+
+
 def test_semp_takes_an_input_whose_square_is_subnormal_without_a_warning():
     # e6da7aa scaled a tiny candidate column by its true RMS where it had been a zero column (its squares underflowed):
     # an input about 1e-160 made u(k-1)^2 about 1e-320, whose θ (about 1e320) overflowed in the bordered fits, and
     # numpy warned 'overflow encountered in divide' from semp (an error under warnings-as-errors); such a candidate's
     # row is inf, scored as a run that diverges
-    rng = np.random.default_rng(3)
-    u = rng.uniform(1, 2, 40)
-    y = np.zeros(40)
-    for k in range(1, 40):
-        y[k] = 0.5 * y[k - 1] + 0.3 * u[k - 1] + 0.001 * rng.standard_normal()
+    u, y = _positive_input_plant()
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         sel = gb.semp(gb.Candidates(1, 1, degree=2), gb.Record(u * 1e-160, y, Ts=1.0), n_terms=2)
@@ -87,11 +93,7 @@ def test_semp_takes_an_input_whose_square_is_subnormal_without_a_warning():
 
 
 def test_semp_refuses_an_included_term_whose_parameter_is_beyond_the_float_range():
-    rng = np.random.default_rng(3)
-    u = rng.uniform(1, 2, 40)
-    y = np.zeros(40)
-    for k in range(1, 40):
-        y[k] = 0.5 * y[k - 1] + 0.3 * u[k - 1] + 0.001 * rng.standard_normal()
+    u, y = _positive_input_plant()
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         with pytest.raises(ValueError, match=r"\['u\(k-1\)\^2'\] cannot be used on these data: .* beyond the float"):
@@ -104,11 +106,7 @@ def test_els_of_a_term_whose_parameter_is_beyond_the_float_range_says_so_without
     # at 1 (its squares underflowed, and ELS refused the structure as not identifiable): its θ, about 5e318, overflowed
     # in scaled_lstsq's x / s, numpy warned 'overflow encountered in divide' and ELS failed on 'theta has non-finite
     # values at [2]'; scaled_lstsq refuses such a solve, saying why
-    rng = np.random.default_rng(3)
-    u = rng.uniform(1, 2, 30)
-    y = np.zeros(30)
-    for k in range(1, 30):
-        y[k] = 0.5 * y[k - 1] + 0.3 * u[k - 1] + 0.05 * u[k - 1] ** 2 + 0.001 * rng.standard_normal()
+    u, y = _positive_input_plant(30, square=0.05)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         with pytest.raises(ValueError, match="beyond the float range"):
