@@ -113,3 +113,21 @@ def test_els_of_a_term_whose_parameter_is_beyond_the_float_range_says_so_without
             gb.els(["y(k-1)", "u(k-1)", "u(k-1)^2"], gb.Record(u * 1e-160, y, Ts=1.0), noise=0)
         theta = gb.els(["y(k-1)", "u(k-1)", "u(k-1)^2"], gb.Record(u * 1e-150, y, Ts=1.0), noise=0).model.theta
     np.testing.assert_allclose(theta * [1, 1e-150, 1e-300], [0.5, 0.3, 0.05], atol=0.02)
+
+
+@pytest.mark.parametrize("fit", ["cls", "pe"])
+def test_cls_and_pe_of_a_term_whose_parameter_is_beyond_the_float_range_say_so_without_a_warning(fit):
+    # review53b's left item: the same column of about 1e-320 in CLS and PE overflowed in the QP's θ (numpy warned
+    # 'overflow encountered in divide', then 'theta has non-finite values at [2]'); refused as scaled_lstsq refuses it
+    u, y = _positive_input_plant(30, square=0.05)
+    rec = gb.Record(u * 1e-160, y, Ts=1.0)
+    terms = ["y(k-1)", "u(k-1)", "u(k-1)^2"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ValueError, match=r"\['u\(k-1\)\^2'\] would be beyond the float range"):
+            if fit == "cls":
+                gb.cls(terms, rec)
+            else:
+                gb.pe_pareto(terms, rec, gb.StaticPoints([1e-160, 2e-160], [1.0, 2.0]), lambdas=[0.5])
+    # at 1e-150 θ is a float (about 5e298): fitted
+    assert np.all(np.isfinite(gb.cls(terms, gb.Record(u * 1e-150, y, Ts=1.0)).model.theta))

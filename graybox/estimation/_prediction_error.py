@@ -272,6 +272,17 @@ class _Data:
     t: np.ndarray | None = None
     offsets: Mapping[str, float] | None = None
 
+    def __post_init__(self) -> None:
+        # a parameter is of the order of the output's spread over its column's RMS: a column of 1e-320 (u(k-1)^2 of
+        # an input of 1e-160) beside an output of 1 has a θ beyond the float range, and the QP's θ overflowed (numpy
+        # warned, then "theta has non-finite values"); refused as scaled_lstsq refuses it
+        with np.errstate(over="ignore", divide="ignore"):
+            far = np.flatnonzero(~np.isfinite(max(self.y_scale, 1e-300) / self.s))
+        if far.size:
+            raise ValueError(f"the parameter(s) of {[str(self.structure.terms[j]) for j in far]} would be beyond the "
+                             "float range (those columns are too small beside the output in these units: rescale the "
+                             "signals)")
+
     def theta(self, z: np.ndarray) -> np.ndarray:
         """θ (engineering units, on the signals as given) of z, shape (n,) or (K, n)."""
         z = np.asarray(z, float)
