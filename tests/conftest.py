@@ -211,8 +211,8 @@ def finish_site_build(build: dict) -> tuple[int, str, "object"]:
 # BESIDE: work that keeps a core busy (the README's and the selection guide's select_graybox calls on the bundled
 # plant, notebooks, the files of one process each), so that the suite and it end together. WAITING: tests that mostly
 # wait (Dask clusters starting, cell time limits running out, processes killed and replaced): their waits overlap the
-# other lanes' work instead of lengthening one of them. `pytest` says each lane's time at the end; BENCHMARKS.md keeps
-# the measurements the split follows (2026-11-28: the suite 366 s, BESIDE 198 s, WAITING 253 s of tests alone).
+# other lanes' work instead of lengthening one of them. `pytest` says each lane's time at the end (2026-11-28, 2 cores:
+# the suite's own tests 315 s, beside 304 s, waiting 319 s; BENCHMARKS.md): move files between them to keep them even.
 BESIDE = ("test_guide_code.py::test_every_python_block_of_a_page_runs[selection.md]",
           "test_readme_api.py::test_selection_example_runs",
           "test_select_checkpoint.py", "test_notebooks.py", "test_bootstrap.py", "test_gram.py", "test_hunt36a.py",
@@ -248,9 +248,8 @@ def runs_beside(item) -> bool:
     return lane_of(item) is not None
 
 
-def start_beside(items, lane: str = "beside") -> dict:
-    """Start ``python -m pytest`` of ``items`` in its own session, its verdicts in a JUnit XML file; ``lane`` names it
-    in what the suite says."""
+def start_beside(items) -> dict:
+    """Start ``python -m pytest`` of ``items`` in its own session, its verdicts in a JUnit XML file."""
     import os
     import subprocess
     import sys
@@ -266,7 +265,7 @@ def start_beside(items, lane: str = "beside") -> dict:
                                 stdout=out, stderr=subprocess.STDOUT, cwd=items[0].config.rootpath,
                                 stdin=subprocess.DEVNULL, start_new_session=True,
                                 env=dict(os.environ, **{_BESIDE_ENV: str(os.getpid())}))
-    return {"proc": proc, "tmp": tmp, "start": time.monotonic(), "lane": lane}
+    return {"proc": proc, "tmp": tmp, "start": time.monotonic()}
 
 
 def _kill_group(proc) -> None:
@@ -370,7 +369,7 @@ def pytest_collection_modifyitems(session, config, items):
         for lane in LANES:
             mine = [item for item in beside if lane_of(item) == lane]
             if mine:
-                runs[lane] = start_beside(mine, lane)
+                runs[lane] = start_beside(mine)
         for item in beside:
             run = runs[lane_of(item)]
             for when, method in (("setup", "setup"), ("call", "runtest"), ("teardown", "teardown")):
