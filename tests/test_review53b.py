@@ -124,7 +124,7 @@ def test_cls_and_pe_of_a_term_whose_parameter_is_beyond_the_float_range_say_so_w
     terms = ["y(k-1)", "u(k-1)", "u(k-1)^2"]
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        with pytest.raises(ValueError, match=r"\['u\(k-1\)\^2'\] would be beyond the float range"):
+        with pytest.raises(ValueError, match=r"\['u\(k-1\)\^2'\] are beyond the float range"):
             if fit == "cls":
                 gb.cls(terms, rec)
             else:

@@ -15,7 +15,7 @@ from threadpoolctl import ThreadpoolController
 
 __all__ = ["column_scales", "scaled_lstsq", "thread_pools", "one_blas_thread", "check_rows", "free_directions",
            "check_identified", "rank_tolerance", "HELD_OUTPUT", "CONSTANT_RTOL", "output_spread", "output_scale",
-           "spread_scale"]
+           "spread_scale", "beyond_float_range"]
 
 _CONTROLLER: list[ThreadpoolController] = []
 
@@ -136,10 +136,15 @@ def scaled_lstsq(A: np.ndarray, b: np.ndarray, rcond: float | None = None) -> np
     with np.errstate(over="ignore"):  # a column of 1e-320 for a target of 1 has a θ of 1e320, not a float
         theta = x / s
     if not np.all(np.isfinite(theta)):
-        raise ValueError(f"least squares: the parameter(s) of column(s) {np.flatnonzero(~np.isfinite(theta)).tolist()} "
-                         "are beyond the float range (those columns are too small beside the target in these units: "
-                         "rescale the signals)")
+        raise beyond_float_range(f"column(s) {np.flatnonzero(~np.isfinite(theta)).tolist()}", "least squares: ")
     return theta
+
+
+def beyond_float_range(which: str, prefix: str = "") -> ValueError:
+    """The error of a fit whose parameters ``which`` (columns, terms) are beyond the float range: columns far too
+    small beside the target in the signals' units (u(k-1)² of an input of 1e-160 is 1e-320, its θ 1e320)."""
+    return ValueError(f"{prefix}the parameter(s) of {which} are beyond the float range (those columns are too small "
+                      "beside the target in these units: rescale the signals)")
 
 
 def rank_tolerance(largest: float, rows: int, n: int = 0) -> float:

@@ -65,8 +65,8 @@ from ..static._curves import StaticCurve, fit_on_powers
 from ._extended_least_squares import els
 from ..static._surfaces import StaticSurface
 from ..static._form_check import varied_inputs
-from ..core._least_squares import (REMEDIES, check_identified, check_rows, column_scales, free_directions, output_scale,
-                                   rank_tolerance, spread_scale)
+from ..core._least_squares import (REMEDIES, beyond_float_range, check_identified, check_rows, column_scales,
+                                   free_directions, output_scale, rank_tolerance, spread_scale)
 from ..models._coerce import as_model, as_structure, static_info, static_points
 from ..models._model import Model
 from ._pareto import ParetoSet
@@ -276,12 +276,10 @@ class _Data:
         # a parameter is of the order of the output's spread over its column's RMS: a column of 1e-320 (u(k-1)^2 of
         # an input of 1e-160) beside an output of 1 has a θ beyond the float range, and the QP's θ overflowed (numpy
         # warned, then "theta has non-finite values"); refused as scaled_lstsq refuses it
-        with np.errstate(over="ignore", divide="ignore"):
-            far = np.flatnonzero(~np.isfinite(max(self.y_scale, 1e-300) / self.s))
+        with np.errstate(over="ignore"):
+            far = np.flatnonzero(~np.isfinite(self.y_scale / self.s))
         if far.size:
-            raise ValueError(f"the parameter(s) of {[str(self.structure.terms[j]) for j in far]} would be beyond the "
-                             "float range (those columns are too small beside the output in these units: rescale the "
-                             "signals)")
+            raise beyond_float_range(str([str(self.structure.terms[j]) for j in far]))
 
     def theta(self, z: np.ndarray) -> np.ndarray:
         """θ (engineering units, on the signals as given) of z, shape (n,) or (K, n)."""
