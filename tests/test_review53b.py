@@ -96,7 +96,7 @@ def test_semp_refuses_an_included_term_whose_parameter_is_beyond_the_float_range
     u, y = _positive_input_plant()
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        with pytest.raises(ValueError, match=r"\['u\(k-1\)\^2'\] cannot be used on these data: .* beyond the float"):
+        with pytest.raises(ValueError, match=r"cannot be used on these data: .*\['u\(k-1\)\^2'\] are beyond the float"):
             gb.semp(gb.Candidates(1, 1, degree=2), gb.Record(u * 1e-160, y, Ts=1.0), n_terms=2,
                     include=["u(k-1)^2"])
 

@@ -8,14 +8,18 @@ solution back: results do not depend on the units the user chose.
 from __future__ import annotations
 
 from contextlib import AbstractContextManager
-from typing import Sequence
+from dataclasses import replace
+from typing import Mapping, Sequence
 
 import numpy as np
 from threadpoolctl import ThreadpoolController
 
+from ._gram import as_gram_records, is_dask_data
+from ._terms import Structure, Term
+
 __all__ = ["column_scales", "scaled_lstsq", "thread_pools", "one_blas_thread", "check_rows", "free_directions",
            "check_identified", "rank_tolerance", "HELD_OUTPUT", "CONSTANT_RTOL", "output_spread", "output_scale",
-           "spread_scale", "beyond_float_range"]
+           "spread_scale", "beyond_float_range", "binary_scaled", "unscaled_theta", "unscaled_rss"]
 
 _CONTROLLER: list[ThreadpoolController] = []
 
@@ -255,3 +259,54 @@ def check_identified(blocks: Sequence[tuple[str, np.ndarray, int]], terms: Seque
         Rs = Rs / np.linalg.norm(Rs, axis=1, keepdims=True)
         static_helps = np.linalg.matrix_rank(Rs @ free, tol=1e-8) == free.shape[1]
     raise ValueError(f"{msg}: {remedies[0] if static_helps else remedies[1]}")
+
+
+#: The data are scaled (:func:`binary_scaled`) when a candidate column's square, or y's, could reach 2^±this.
+_SAFE_EXPONENT = 900
+
+
+def binary_scaled(data: object, process: Structure) -> tuple[object, dict[str, int]]:
+    """The in-memory records with y and each input times 2^-e, e the exponent that brings the signal's largest
+    magnitude over the records into [0.5, 1), and those exponents by signal name (``"e"``, a noise term's, is y's);
+    the data as they are, and {},
+    where no candidate column's square (nor y's) can come near the ends of the floating-point range (no copy of
+    ordinary data), and for Dask records.
+
+    A power of two is exact: every candidate column is the data's times a power of two, so once scaled to unit
+    RMS the columns, ERR and the choice are those of the data themselves, bit for bit, while products of large
+    signals (y ≈ 1e160, y²) or yᵀy of small ones (y ≈ 1e-200) no longer leave the floating-point range."""
+    if is_dask_data(data):
+        return data, {}
+    records = as_gram_records(data)
+    names = records[0].input_names
+    us = [np.asarray(r.u, dtype=float).reshape(len(r.y), -1) for r in records]
+    if any(u.shape[1] != len(names) for u in us):
+        return data, {}  # records that do not agree: refused, in their own words, where they are read
+    exps = {}
+    for i, name in enumerate(("y",) + tuple(names)):
+        top = max(float(np.max(np.abs(r.y if i == 0 else u[:, i - 1]), initial=0.0)) for r, u in zip(records, us))
+        exps[name] = int(np.frexp(top)[1]) if np.isfinite(top) and top > 0 else 0
+    exps["e"] = exps["y"]  # an MA part's noise is in the output's units (ELS's e(k-1)y(k-1))
+    reach = max([abs(exps["y"])] + [sum(p * abs(exps.get(s, 0)) for s, _, p in t.factors) for t in process])
+    if 2 * reach <= _SAFE_EXPONENT:
+        return data, {}
+    d = np.array([exps[n] for n in names])
+    scaled = [replace(r, u=np.ldexp(r.u, -d[0] if r.u.ndim == 1 else -d), y=np.ldexp(r.y, -exps["y"]))
+              for r in records]
+    return scaled, exps
+
+
+def unscaled_theta(theta: np.ndarray, terms: Sequence[Term], exps: Mapping[str, int]) -> np.ndarray:
+    """θ on the data's own signals of a fit on the signals times 2^-e (:func:`binary_scaled`): inf or 0 where it
+    leaves the float range (callers refuse it: :func:`beyond_float_range`)."""
+    if not exps:
+        return theta
+    with np.errstate(over="ignore", under="ignore"):  # a θ beyond the range is refused by the Selection, named
+        return np.ldexp(theta, np.array([exps["y"] - sum(p * exps.get(s, 0) for s, _, p in t.factors) for t in terms],
+                                        dtype=int))
+
+
+def unscaled_rss(rss: np.ndarray, exps: Mapping[str, int]) -> np.ndarray:
+    """The data's own RSS (output units²: inf or 0 where it leaves the floating-point range, as y² there)."""
+    with np.errstate(over="ignore", under="ignore"):
+        return np.ldexp(rss, 2 * exps.get("y", 0))

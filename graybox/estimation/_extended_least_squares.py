@@ -84,7 +84,8 @@ from scipy.linalg import solve_triangular
 from scipy.optimize import least_squares
 
 from ..core._simulation_kernels import inverse_ma_filter
-from ..core._least_squares import check_identified, check_rows, column_scales, free_directions, scaled_lstsq
+from ..core._least_squares import (beyond_float_range, binary_scaled, check_identified, check_rows, column_scales, free_directions,
+                                   scaled_lstsq, unscaled_theta)
 from ..models._coerce import as_structure, records_of
 from ..models._model import Model
 from ..selection._centring import centred_data, is_closed, raw_theta, signal_offsets
@@ -521,14 +522,25 @@ def _iterate(fit: _ExtendedFit, xi: np.ndarray, theta: np.ndarray, max_iter: int
 
 def _result(reg: _Regression, theta: np.ndarray, c: np.ndarray, n_iter: int, conv: bool, hist: list[float],
             x: np.ndarray, theta_ls: np.ndarray, name: str, n_direct: int = 0,
-            offsets: dict | None = None) -> ELSResult:
+            offsets: dict | None = None, exps: dict | None = None) -> ELSResult:
     """The ELSResult: the model with its MA part and the residuals per record (``offsets``: the signals' centres
-    the fit ran on, its θ mapped back to the raw signals; the residuals are the same on both)."""
+    the fit ran on, its θ mapped back to the raw signals; the residuals are the same on both; ``exps``: the powers of
+    two the signals were scaled by, :func:`~graybox.core._least_squares.binary_scaled`, undone here)."""
     if offsets is not None:
         n = len(reg.process)
         # the MA part too: a noise term's other factors were centred (e(k-1)(y(k-1) − c) = e(k-1)y(k-1) − c e(k-1))
         both = raw_theta(Structure(list(reg.process) + list(reg.ns)), np.r_[theta, c], offsets)
         theta, c, theta_ls = both[:n], both[n:], raw_theta(reg.process, theta_ls, offsets)
+    if exps:
+        terms = list(reg.process)
+        theta, theta_ls = unscaled_theta(theta, terms, exps), unscaled_theta(theta_ls, terms, exps)
+        c = unscaled_theta(c, list(reg.ns), exps)
+        far = [str(t) for t, a, b in zip(terms + list(reg.ns), np.r_[theta, c], np.r_[theta_ls, c])
+               if not (np.isfinite(a) and np.isfinite(b))]
+        if far:  # u(k-1)² of an input about 1e-160 is about 1e-320: its θ, about 1e320, is no float
+            raise beyond_float_range(str(far), f"{name}: ")
+        with np.errstate(over="ignore", under="ignore"):
+            x = np.ldexp(x, exps["y"])  # the residuals in the output's units
     m = Model(reg.process, theta, noise_structure=reg.ns, noise_theta=c, name=name, **carried_from(reg.recs))
     res = tuple(frozen(a) for a in reg.per_record(x))
     return ELSResult(m, n_iter, conv, tuple(hist), res, frozen(theta_ls), n_direct)
@@ -621,7 +633,10 @@ def els(
     tol = check_real(tol, "tol", low=0, low_open=True)
     relaxation = check_real(relaxation, "relaxation", low=0, high=1, low_open=True)
     direct = check_bool(direct, "direct")
-    recs = records_of(data)
+    # y and the inputs times a power of two where their products would leave the float range (as frols does): the
+    # same fit bit for bit, where at y near 1e155 y² overflowed and near 1e-200 the residuals' squares underflowed,
+    # and either way the MA part was skipped as if the fit were exact (the iterations' Gram entries underflowed too)
+    recs, exps = binary_scaled(records_of(data), Structure(list(process) + list(ns)))
     # A model closed under shifts (its process terms, and its MA part: plain lags, or products whose divisors it
     # holds, :func:`_shift_offsets`) is fitted on the centred signals and mapped back (as the SE fits are): the same
     # model, and the same convergence, at any offset of u and y. On the raw ones, terms near 1e8 at 1e4 spreads put
@@ -650,7 +665,7 @@ def els(
     # No MA part, or a model that explains the data to round-off (of the raw signals, whatever their zero): then the
     # MA regressors would be round-off columns, so the MA part is zero by definition.
     if len(ns) == 0 or np.sqrt(np.mean(xi**2)) <= 1e-12 * np.sqrt(np.mean(reg.y**2)) + y_raw:
-        return _result(reg, theta_ls, np.zeros(len(ns)), 0, True, [], xi, theta_ls, name, offsets=offsets)
+        return _result(reg, theta_ls, np.zeros(len(ns)), 0, True, [], xi, theta_ls, name, offsets=offsets, exps=exps)
 
     fit = _ExtendedFit(reg)
     lags = _pure_lags(ns)
@@ -659,4 +674,4 @@ def els(
     if not converged:
         _warn_not_converged(max_iter, hist, tol, relaxation, c, lags, fallback)
     n_direct = fallback.n_direct if fallback is not None else 0
-    return _result(reg, theta, c, len(hist), converged, hist, xi, theta_ls, name, n_direct, offsets)
+    return _result(reg, theta, c, len(hist), converged, hist, xi, theta_ls, name, n_direct, offsets, exps)

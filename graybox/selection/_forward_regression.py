@@ -70,7 +70,7 @@ from ..core._gram import (
     term_factors,
     triangular_factor,
 )
-from ..core._least_squares import one_blas_thread
+from ..core._least_squares import binary_scaled, one_blas_thread, unscaled_rss, unscaled_theta
 from ..core._regressors import check_structure_inputs, record_signals
 from ..core._validation import (as_1d_finite, check_bool, check_choice, check_fields, check_int, check_mean_square, check_real,
                                 check_theta, warn)
@@ -721,7 +721,7 @@ def frols(
     check_choice(search, "search", SEARCHES)
     # the search runs on y and each input times a power of two (exact: the same columns once scaled to unit RMS,
     # the same ERR), so that neither their products nor yᵀy overflow or underflow where the data are finite
-    given, (data, exps) = data, _binary_scaled(data, process)
+    given, (data, exps) = data, binary_scaled(data, process)
     cols = _scaled_columns(process, data, rule, max_terms, method, keep=forced)
     N, yy, active, skipped = cols.n_rows, cols.yy, cols.active, cols.skipped
     # said together with the candidates dropped during the selection: one CandidateWarning per call
@@ -809,7 +809,7 @@ def frols(
                               f"the {cols.method} form could not tell (noise-free data?); ask for fewer terms"
                               + (", or method='mgs'" if cols.method == "gram" else ""), int(weak[0]))
     theta_scaled = _back_substitute(np.triu(R), g[:n_sel])
-    theta = _unscaled_theta(theta_scaled / cols.scales[idx], [process[j] for j in idx], exps)
+    theta = unscaled_theta(theta_scaled / cols.scales[idx], [process[j] for j in idx], exps)
     evaluated = Structure([process[j] for j in chosen])
     return Selection(
         structure=evaluated[:n_sel],
@@ -818,7 +818,7 @@ def frols(
         noise=noise,
         evaluated=evaluated,
         err_evaluated=err_eval,
-        rss=_unscaled_rss(rss, exps),
+        rss=unscaled_rss(rss, exps),
         criterion=curve_name,
         criterion_curve=curve,
         stop=stop,
@@ -827,56 +827,9 @@ def frols(
         skipped=tuple(skipped),
         search=search,
         subsets=() if plan is None else tuple(Structure([process[j] for j in S]) for S in plan.subsets),
-        subset_rss=() if plan is None else _unscaled_rss(plan.rss, exps),
+        subset_rss=() if plan is None else unscaled_rss(plan.rss, exps),
         **carried_from(as_gram_records(given)),
     )
-
-
-#: The data are scaled (:func:`_binary_scaled`) when a candidate column's square, or y's, could reach 2^±this.
-_SAFE_EXPONENT = 900
-
-
-def _binary_scaled(data: object, process: Structure) -> tuple[object, dict[str, int]]:
-    """The in-memory records with y and each input times 2^-e, e the exponent that brings the signal's largest
-    magnitude over the records into [0.5, 1), and those exponents by signal name; the data as they are, and {},
-    where no candidate column's square (nor y's) can come near the ends of the floating-point range (no copy of
-    ordinary data), and for Dask records.
-
-    A power of two is exact: every candidate column is the data's times a power of two, so once scaled to unit
-    RMS the columns, ERR and the choice are those of the data themselves, bit for bit, while products of large
-    signals (y ≈ 1e160, y²) or yᵀy of small ones (y ≈ 1e-200) no longer leave the floating-point range."""
-    if is_dask_data(data):
-        return data, {}
-    records = as_gram_records(data)
-    names = records[0].input_names
-    us = [np.asarray(r.u, dtype=float).reshape(len(r.y), -1) for r in records]
-    if any(u.shape[1] != len(names) for u in us):
-        return data, {}  # records that do not agree: refused, in their own words, where they are read
-    exps = {}
-    for i, name in enumerate(("y",) + tuple(names)):
-        top = max(float(np.max(np.abs(r.y if i == 0 else u[:, i - 1]), initial=0.0)) for r, u in zip(records, us))
-        exps[name] = int(np.frexp(top)[1]) if np.isfinite(top) and top > 0 else 0
-    reach = max([abs(exps["y"])] + [sum(p * abs(exps.get(s, 0)) for s, _, p in t.factors) for t in process])
-    if 2 * reach <= _SAFE_EXPONENT:
-        return data, {}
-    d = np.array([exps[n] for n in names])
-    scaled = [replace(r, u=np.ldexp(r.u, -d[0] if r.u.ndim == 1 else -d), y=np.ldexp(r.y, -exps["y"]))
-              for r in records]
-    return scaled, exps
-
-
-def _unscaled_theta(theta: np.ndarray, terms: Sequence[Term], exps: Mapping[str, int]) -> np.ndarray:
-    """θ on the data's own signals of a fit on the signals times 2^-e (:func:`_binary_scaled`)."""
-    if not exps:
-        return theta
-    with np.errstate(over="ignore", under="ignore"):  # a θ beyond the range is refused by the Selection, named
-        return np.ldexp(theta, [exps["y"] - sum(p * exps.get(s, 0) for s, _, p in t.factors) for t in terms])
-
-
-def _unscaled_rss(rss: np.ndarray, exps: Mapping[str, int]) -> np.ndarray:
-    """The data's own RSS (output units²: inf or 0 where it leaves the floating-point range, as y² there)."""
-    with np.errstate(over="ignore", under="ignore"):
-        return np.ldexp(rss, 2 * exps.get("y", 0))
 
 
 def _unscaled_curve(name: str, rss: np.ndarray, N: int, ey: int) -> np.ndarray:
@@ -892,9 +845,9 @@ def _unscaled_curve(name: str, rss: np.ndarray, N: int, ey: int) -> np.ndarray:
 def _frols_centred(candidates: Structure, data: object, **options) -> Selection:
     """frols(centre=True): select on the centred signals, close the choice under shifts, refit (see frols)."""
     # the whole of it (the search, the closure's told_apart, its fit and the subsets' RSS) on y and each input times
-    # a power of two where the data come near the float range's ends (:func:`_binary_scaled`): the search alone was,
+    # a power of two where the data come near the float range's ends (:func:`binary_scaled`): the search alone was,
     # and told_apart on y × 2^-600 took y(k-1) for a linear combination of lower terms, a smaller closure returned
-    given, (data, exps) = data, _binary_scaled(data, candidates.process)
+    given, (data, exps) = data, binary_scaled(data, candidates.process)
     offsets = _centring.search_offsets(data)
     centred = _centring.centred_data(data, offsets)
     _centring.check_included(options["include"], candidates.process, given)
@@ -928,12 +881,12 @@ def _frols_centred(candidates: Structure, data: object, **options) -> Selection:
         subset_rss = np.array([_centring.least_squares(S, centred, L)[1] for S in subsets])
     own = {k: math.ldexp(v, exps.get(k, 0)) for k, v in offsets.items()}  # the data's own offsets
     stop = _centring.stop_note(sel.stop, len(sel.structure), len(full), own, dropped)
-    theta = _unscaled_theta(_centring.raw_theta(closed, fit.theta, offsets), list(closed), exps)
+    theta = unscaled_theta(_centring.raw_theta(closed, fit.theta, offsets), list(closed), exps)
     if exps:  # RSS and the criterion curve in the data's own units (the fit's rows: L on, of each record)
         n_rows = sum(len(r.y) - L for r in as_gram_records(data))
-        fit = replace(fit, rss=_unscaled_rss(fit.rss, exps),
+        fit = replace(fit, rss=unscaled_rss(fit.rss, exps),
                       criterion_curve=_unscaled_curve(fit.criterion, fit.rss, n_rows, exps.get("y", 0)))
-        subset_rss = _unscaled_rss(np.asarray(subset_rss), exps) if len(subset_rss) else subset_rss
+        subset_rss = unscaled_rss(np.asarray(subset_rss), exps) if len(subset_rss) else subset_rss
     return replace(fit, theta=theta, stop=stop, n_candidates=sel.n_candidates, skipped=skipped, search=sel.search,
                    subsets=subsets, subset_rss=subset_rss)
 

@@ -39,7 +39,7 @@ import pandas as pd
 import scipy.linalg
 
 from ..core._gram import triangular_factor
-from ..core._least_squares import column_scales, one_blas_thread, output_scale
+from ..core._least_squares import beyond_float_range, binary_scaled, column_scales, one_blas_thread, output_scale, unscaled_theta
 from ..core._regressors import refuse_non_finite_columns
 from ..core._simulation_kernels import batch_sse, encode, input_products, record_inputs
 from ..models._model import Model, model_input_names
@@ -343,6 +343,9 @@ def semp(
     if check_bool(centre, "centre"):
         return _semp_centred(candidates, data, n_terms=n_terms, tol=tol, criterion=criterion, max_terms=max_terms,
                              include=include, prune=prune, prune_tol=prune_tol, rank_tol=rank_tol, threads=threads)
+    # y and the inputs times a power of two where their products would leave the float range (as frols does): the
+    # same search bit for bit, where y near 1e-200 underflowed the free-run errors' squares (ln 0 in the criterion)
+    data, exps = binary_scaled(data, opt.process)
     # one BLAS thread: the factor of [S, y] and each step's small QRs gain nothing from more, and on a loaded
     # machine lose much (the plant's semp(n_terms=10): 7.2 s on two threads, 3.4 s on one)
     with one_blas_thread():
@@ -366,11 +369,33 @@ def semp(
                              "included terms")
         run = _Search(sc, opt)
         stop, capped = _grow(run)
-        return _result(run, stop, capped)
+        return _unscaled(_result(run, stop, capped), exps)
+
+
+def _unscaled(res: SEMPResult, exps: dict[str, int]) -> SEMPResult:
+    """A search's result on the signals times 2^-e (:func:`~graybox.core._least_squares.binary_scaled`) in the data's
+    own units: θ; the free-run MSEs (output units², 0 or inf where they leave the float range, as y² there); the
+    criterion, N ln of the MSE, plus N ln 4^e."""
+    if not exps:
+        return res
+    ey = exps["y"]
+    path, fwd = res.path, res.forward_scores
+    with np.errstate(over="ignore", under="ignore"):
+        path["score"] = np.ldexp(path["score"].to_numpy(float), 2 * ey)
+        path["criterion"] = path["criterion"].to_numpy(float) + res.n_rows * 2 * ey * math.log(2.0)
+        fwd[:] = np.ldexp(fwd.to_numpy(float), 2 * ey)
+        score = float(np.ldexp(res.score, 2 * ey))
+    theta = unscaled_theta(res.theta, list(res.structure), exps)
+    far = [str(t) for t, th in zip(res.structure, theta) if not np.isfinite(th)]
+    if far:  # u(k-1)² of an input about 1e-160 is about 1e-320: its θ, about 1e320, is no float
+        raise beyond_float_range(str(far), "semp: the structure chosen cannot be used on these data: ")
+    return replace(res, theta=frozen(theta), score=score, path=path, forward_scores=fwd)
 
 
 def _semp_centred(candidates: Structure, data: Record | Sequence[Record] | Dataset, **options) -> SEMPResult:
     """semp(centre=True): search on the centred signals, close the choice under shifts, refit (see semp)."""
+    # the whole of it on the signals times a power of two where they come near the float range's ends (as semp)
+    data, exps = binary_scaled(data, candidates.process)
     offsets = _centring.search_offsets(data)
     centred = _centring.centred_data(data, offsets)
     _centring.check_included(options["include"], candidates.process, data)
@@ -396,8 +421,8 @@ def _semp_centred(candidates: Structure, data: Record | Sequence[Record] | Datas
              "fitted by least squares) diverges in free run on the identification records: its score is inf; take "
              "fewer terms, or centre out", RuntimeWarning)
     stop = _centring.stop_note(res.stop, len(res.structure), len(full), offsets, dropped)
-    return replace(res, structure=closed, theta=frozen(_centring.raw_theta(closed, theta, offsets)),
-                   score=score, stop=stop)
+    return _unscaled(replace(res, structure=closed, theta=frozen(_centring.raw_theta(closed, theta, offsets)),
+                             score=score, stop=stop), exps)
 
 
 # --------------------------------------------------------------------------------------

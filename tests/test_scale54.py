@@ -1,0 +1,84 @@
+"""ELS and SEMP on signals near the ends of the float range: the same fit as in ordinary units.
+
+At y near 1e155, y² overflowed (ELS's round-off threshold became inf); near 1e-200 the residuals' squares underflowed to
+0; either way ELS returned least squares as if the fit were exact, its MA part skipped, and SEMP's criterion took
+ln 0. Both now run, as frols does, on y and each input times a power of two (exact), and map θ back.
+"""
+import warnings
+
+import numpy as np
+import pytest
+
+import graybox as gb
+
+
+def _plant(n: int = 300):
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(0.5, 2.0, n // 10 + 1), 10)[:n]
+    y = np.zeros(n)
+    e = 0.01 * rng.standard_normal(n)
+    for k in range(1, n):
+        y[k] = 0.7 * y[k - 1] + 0.2 * u[k - 1] + 0.05 * u[k - 1] ** 2 + e[k] + 0.5 * e[k - 1]
+    return u, y
+
+
+TERMS = ["y(k-1)", "u(k-1)", "u(k-1)^2", "u(k-2)y(k-2)"]
+
+
+def _unit_free(theta, terms, sy, su):
+    """θ of the same model in units where y is sy times and u su times larger (y(k) = Σ θ_t Π factors)."""
+    out = []
+    for th, t in zip(theta, gb.Structure(terms)):
+        a = sum(p for s, _, p in t.factors if s in ("y", "e"))
+        b = sum(p for s, _, p in t.factors if s == "u")
+        out.append(th * sy / sy**a / su**b)
+    return np.array(out)
+
+
+@pytest.mark.parametrize("sy, su", [(1e155, 1.0), (1e-200, 1.0), (1.0, 1e-100), (1e200, 1e100)])
+def test_els_is_the_same_fit_in_any_units(sy, su):
+    u, y = _plant()
+    base = gb.els(TERMS, gb.Record(u, y), noise=2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        far = gb.els(TERMS, gb.Record(u * su, y * sy), noise=2)
+    assert far.n_iter == base.n_iter and far.n_iter > 0  # the MA part was fitted (it was skipped)
+    np.testing.assert_allclose(far.model.theta, _unit_free(base.model.theta, TERMS, sy, su), rtol=1e-12)
+    np.testing.assert_allclose(far.model.noise_theta, base.model.noise_theta, rtol=1e-12)
+    np.testing.assert_allclose(far.residuals[0] / sy, base.residuals[0], rtol=0, atol=1e-11 * np.std(base.residuals[0]))
+
+
+@pytest.mark.parametrize("sy", [1e155, 1e-200])
+def test_semp_is_the_same_search_in_any_units(sy):
+    u, y = _plant()
+    cand = gb.Candidates(2, 2, degree=2)
+    base = gb.semp(cand, gb.Record(u, y), n_terms=4)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        far = gb.semp(cand, gb.Record(u, y * sy), n_terms=4)
+    assert list(far.structure) == list(base.structure)
+    terms = [str(t) for t in base.structure]
+    np.testing.assert_allclose(far.theta, _unit_free(base.theta, terms, sy, 1.0), rtol=1e-12)
+    # the MSEs in output units² where they are floats (about 1e308 × 0.02 overflows, 1e-400 × 4e-4 underflows)
+    for a, b in ((far.score, base.score), (far.path["score"].to_numpy(), base.path["score"].to_numpy()),
+                 (far.forward_scores.to_numpy(), base.forward_scores.to_numpy())):
+        a, b = np.atleast_1d(a), np.atleast_1d(b)
+        own = np.isfinite(a) & (a > np.finfo(float).tiny) & np.isfinite(b)
+        np.testing.assert_allclose(a[own] / sy / sy, b[own], rtol=1e-12)
+        # the others left the range: 0 or inf where the data's own MSE was finite
+        assert np.all(((a == 0) | np.isinf(a))[~own & np.isfinite(b)])
+    # the criterion is N ln of the MSE: shifted by N ln sy² (2 N ln sy)
+    shift = 2 * base.n_rows * np.log(sy)
+    finite = np.isfinite(base.path["criterion"].to_numpy())
+    np.testing.assert_allclose(far.path["criterion"].to_numpy()[finite] - shift,
+                               base.path["criterion"].to_numpy()[finite], rtol=1e-9)
+
+
+def test_els_refuses_a_parameter_beyond_the_float_range_in_the_users_units():
+    # u × 1e-200: u(k-1)² is about 1e-400 of the ordinary one, its θ about 1e399: fitted on the scaled signals, it is no
+    # float in the user's units, said naming the term
+    u, y = _plant()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ValueError, match=r"ELS: the parameter\(s\) of \['u\(k-1\)\^2'\] are beyond the float range"):
+            gb.els(TERMS, gb.Record(u * 1e-200, y), noise=2)
