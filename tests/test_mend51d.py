@@ -374,9 +374,13 @@ def test_residual_tests_files_graybox_writes_still_load(tmp_path, rule, inputs):
 
 # --- 3b. semp: the same overflow let numpy's warning through and named no candidate ----------------------------
 
-def test_semp_names_the_candidate_beyond_the_float_range_without_numpys_warning():
+def test_semp_searches_candidates_beyond_the_float_range_as_frols_does_without_numpys_warning():
+    # semp once refused such data ('candidate regressors overflow … (e.g. y(k-1)^2)'), where numpy had warned; it now
+    # searches, as frols does, on y and u times a power of two (scale54): the same structure as in ordinary units
     cand = gb.Structure(["u(k-1)", "y(k-1)", "u(k-1)^2", "y(k-1)^2", "1"])
+    rec = _huge_record()
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        with pytest.raises(ValueError, match=r"candidate regressors overflow.*\(e\.g\. y\(k-1\)\^2\)"):
-            gb.semp(cand, _huge_record(), n_terms=2)
+        huge = gb.semp(cand, rec, n_terms=2)
+    own = gb.semp(cand, gb.Record(rec.u, rec.y * 1e-200), n_terms=2)
+    assert list(huge.structure) == list(own.structure)

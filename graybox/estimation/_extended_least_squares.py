@@ -636,7 +636,11 @@ def els(
     # y and the inputs times a power of two where their products would leave the float range (as frols does): the
     # same fit bit for bit, where at y near 1e155 y² overflowed and near 1e-200 the residuals' squares underflowed,
     # and either way the MA part was skipped as if the fit were exact (the iterations' Gram entries underflowed too)
-    recs, exps = binary_scaled(records_of(data), Structure(list(process) + list(ns)))
+    given = records_of(data)
+    recs, exps = binary_scaled(given, Structure(list(process) + list(ns)))
+    if exps:  # but a term whose column is no float in the user's units is refused by name, as before (mend51d): the
+        # model's own predictions multiply it out
+        stacked_regressors(process, given)
     # A model closed under shifts (its process terms, and its MA part: plain lags, or products whose divisors it
     # holds, :func:`_shift_offsets`) is fitted on the centred signals and mapped back (as the SE fits are): the same
     # model, and the same convergence, at any offset of u and y. On the raw ones, terms near 1e8 at 1e4 spreads put
