@@ -68,7 +68,7 @@ import numba as nb
 import numpy as np
 
 from ..core._records import Record, StaticPoints, frame_inputs
-from ..core._validation import as_1d_finite, check_real, real_array
+from ..core._validation import as_1d_finite, check_real, locked, real_array
 from .pumping import (DEFAULT_SEED, PumpingPlant, _staircase, check_plant, check_static_levels, initial_state,
                       reference_lengths, regenerate_main, static_samples, static_speeds, write_csv_pair)
 from ..core._reprs import short_repr
@@ -147,8 +147,7 @@ class TwoSpeedRun:
     def __post_init__(self) -> None:
         for name in ("t", "u", "y", "pressure", "speed", "flow", "pump_flow", "surge", "air_loss"):
             a = np.array(getattr(self, name), dtype=float, copy=True)
-            a.setflags(write=False)  # a run is a value
-            object.__setattr__(self, name, a)
+            object.__setattr__(self, name, locked(a))  # a run is a value
 
     def record(self, name: str = "pumping_miso") -> Record:
         """The measured inputs/output as a two-input :class:`~graybox.Record` (inputs ``u1``, ``u2`` in rpm; mlc).

@@ -202,7 +202,8 @@ import numpy as np
 
 from ..core._files import write_atomically
 from ..core._records import Record, StaticPoints
-from ..core._validation import as_1d_finite, check_bool, check_count, check_int, check_real, check_seed, real_array
+from ..core._validation import (as_1d_finite, check_bool, check_count, check_int, check_real, check_seed, locked,
+                                real_array)
 from ..reference import EQ1_COEFFICIENTS
 from ..core._reprs import short_repr
 
@@ -297,8 +298,7 @@ class PlantRun:
     def __post_init__(self) -> None:
         for name in ("t", "u", "y", "pressure", "speed", "flow", "surge", "air_loss"):
             a = np.array(getattr(self, name), dtype=float, copy=True)
-            a.setflags(write=False)  # a run is a value: nobody edits it in place
-            object.__setattr__(self, name, a)
+            object.__setattr__(self, name, locked(a))  # a run is a value: nobody edits it in place
 
     def record(self, name: str = "pumping") -> Record:
         """The measured input/output pair as a :class:`~graybox.Record` (rpm, mlc) named ``name``."""

@@ -76,7 +76,8 @@ from ..core._gram import as_gram_records, available_memory, is_dask_data, r_fact
 from ..core._regressors import refuse_non_finite_columns, stacked_regressors
 from ..core._terms import Structure
 from ..selection._centring import _centre_of, centred_data, is_closed, is_held, shift_map, signal_offsets
-from ..core._validation import check_bool, check_choice, check_fields, check_int, check_lambdas, check_real, check_theta, warn
+from ..core._validation import (check_bool, check_choice, check_fields, check_int, check_lambdas, check_real, check_theta,
+                                locked, warn)
 
 if TYPE_CHECKING:  # cvxpy (and the scipy.stats it imports) takes seconds to import: loaded by the QP paths only
     import cvxpy as cp
@@ -96,8 +97,7 @@ __all__ = [
 ]
 
 #: The paper's PE sweep (Section IV-B), the default ``lambdas``: 100 λ1 in logspace(−6, 0).
-PE_LAMBDAS = np.logspace(-6, 0, 100)
-PE_LAMBDAS.setflags(write=False)
+PE_LAMBDAS = locked(np.logspace(-6, 0, 100))
 
 #: Accepted ``how`` values of :func:`cls`: what static points impose.
 HOW = ("auto", "curve", "points", "context")

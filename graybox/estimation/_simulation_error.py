@@ -91,7 +91,7 @@ from ..core._files import folder_now, sweep_written_beside, write_atomically, wr
 from ..core._terms import Structure, default_input_names
 from ..core._validation import (FrozenMap, check_choice, check_count, check_int, check_lambdas, check_real, check_seed, check_sequence,
                                 short_value,
-                                check_path, check_theta, frozen, warn)
+                                check_path, check_theta, frozen, locked, warn)
 from ._local_models import (SLOW_FACTOR, LocalModels, SlowModeWarning, check_margin, record_points, slow_margin,
                             within_at)
 from ..core._reprs import point_texts, short_repr
@@ -100,8 +100,7 @@ from ..core._version import graybox_version
 __all__ = ["SEProblem", "GAOptions", "SEFront", "ga_front", "gradient_front", "se_pareto", "SE_LAMBDAS", "refit_if_slow"]
 
 #: The paper's SE sweep (Section IV-C), the default ``lambdas``: 100 λ1 in logspace(−2, 0).
-SE_LAMBDAS = np.logspace(-2, 0, 100)
-SE_LAMBDAS.setflags(write=False)
+SE_LAMBDAS = locked(np.logspace(-2, 0, 100))
 
 
 class SEProblem:

@@ -73,7 +73,7 @@ from ..core._gram import (
 from ..core._least_squares import binary_scaled, one_blas_thread, unscaled_rss, unscaled_theta
 from ..core._regressors import check_structure_inputs, record_signals
 from ..core._validation import (as_1d_finite, check_bool, check_choice, check_fields, check_int, check_mean_square, check_real,
-                                check_theta, warn)
+                                check_theta, locked, warn)
 from ._stopping import choose_model, stop_rule, FewerTermsError, StopRule
 from . import _centring
 from ._subset_search import search_sizes, SearchBudget, SubsetProblem
@@ -254,8 +254,7 @@ class Selection:
             a = np.array(getattr(self, name), dtype=float, copy=True)
             if a.shape != (size,):  # one value per selected term, per evaluated term or per subset
                 raise ValueError(f"{name} must have shape ({size},), got {a.shape}")
-            a.setflags(write=False)
-            object.__setattr__(self, name, a)
+            object.__setattr__(self, name, locked(a))
         check_theta(n, self.theta)  # finite, as the model it gives needs (a file loads through here: graybox.io)
         for name in ("err", "err_evaluated", "rss", "subset_rss"):
             check_mean_square(getattr(self, name), f"Selection: {name} (a share or a sum of squares)")

@@ -68,7 +68,7 @@ from ._equilibrium_kernels import (
 )
 from ..core._terms import Structure, Term, structure_of
 from ..core._validation import (as_1d_finite, check_bool, check_fields, check_per_point, check_real,
-                                check_theta, real_array)
+                                check_theta, locked, real_array)
 from ..core._reprs import LISTED, point_texts, short_repr
 from ._linearisation import (characteristic_roots, derivative_map, grid_coefficients, static_gains, static_powers,
                              static_theta_gradient_of)
@@ -253,8 +253,7 @@ def cluster_membership(keys: list[tuple[int, ...]]) -> tuple[tuple[tuple[int, ..
     R = np.zeros((len(uniq), len(keys)))
     for j, k in enumerate(keys):
         R[uniq.index(k), j] = 1.0
-    R.setflags(write=False)
-    return uniq, R
+    return uniq, locked(R)  # shared by every caller (lru_cache): nobody may make it writeable
 
 
 # -- the static polynomial and its real roots ----------------------------------------------------

@@ -8,7 +8,7 @@ import numpy as np
 
 from ..core._least_squares import scaled_lstsq
 from ..core._records import StaticPoints, outside_range
-from ..core._validation import as_1d_finite, check_int, check_real, check_str, real_array
+from ..core._validation import as_1d_finite, check_int, check_real, check_str, locked, real_array
 from ..core._reprs import listed, short_repr
 
 __all__ = ["StaticCurve", "fit_on_powers"]
@@ -38,8 +38,7 @@ class StaticCurve:
         c = np.array(as_1d_finite(real_array(self.coefficients, what, "numbers in ascending powers"), what))
         if c.size == 0:
             raise ValueError(f"{self.name}: a polynomial needs at least one coefficient")
-        c.setflags(write=False)
-        object.__setattr__(self, "coefficients", c)
+        object.__setattr__(self, "coefficients", locked(c))
         if self.domain is not None:
             d = self.domain
             if isinstance(d, str) or not hasattr(d, "__len__") or len(d) != 2:

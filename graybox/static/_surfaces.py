@@ -16,7 +16,7 @@ import numpy as np
 from ..core._least_squares import scaled_lstsq
 from ..core._records import StaticPoints, frame_inputs, outside_range
 from ..core._terms import check_input_names
-from ..core._validation import as_1d_finite, check_int, check_real, check_sequence, check_str, real_array
+from ..core._validation import as_1d_finite, check_int, check_real, check_sequence, check_str, locked, real_array
 from ..core._reprs import listed, short_repr
 
 __all__ = ["StaticSurface", "monomial_exponents", "box_grid"]
@@ -132,9 +132,8 @@ class StaticSurface:
         c = np.array(as_1d_finite(real_array(self.coefficients, what, "numbers, one per monomial"), what))
         if c.size != len(ex):
             raise ValueError(f"{self.name}: {c.size} coefficients for {len(ex)} monomials")
-        c.setflags(write=False)
         object.__setattr__(self, "exponents", ex)
-        object.__setattr__(self, "coefficients", c)
+        object.__setattr__(self, "coefficients", locked(c))
         if self.domain is not None:
             dom = check_sequence(self.domain, "domain", "a sequence of (low, high) pairs, one per input")
             if len(dom) != m:

@@ -1,0 +1,39 @@
+"""review54a: regressions found reviewing 9bb79da … 48663a5."""
+
+import numpy as np
+import pytest
+
+import graybox as gb
+
+
+def _cannot_be_made_writeable(a, name):
+    for target in (a, a.base):
+        if isinstance(target, np.ndarray):
+            with pytest.raises(ValueError, match="WRITEABLE"):
+                target.flags.writeable = True
+    assert not a.flags.writeable, name
+
+
+def test_arrays_of_selections_curves_surfaces_cluster_maps_and_plant_runs_cannot_be_made_writeable_again():
+    """4a5f8bb locked Records', Models' and StaticPoints' arrays, but a Selection's θ and ERR, a StaticCurve's or
+    StaticSurface's coefficients, cluster_map's R (shared by every later call: lru_cache), a plant run's samples and
+    PE_LAMBDAS / SE_LAMBDAS were still read-only arrays owning their memory: ``a.flags.writeable = True`` then an edit
+    changed the frozen value (and, for R and the λ grids, every later caller's)."""
+    rng = np.random.default_rng(0)
+    u = rng.uniform(0.0, 1.0, 60)
+    y = np.zeros(60)
+    for k in range(1, 60):
+        y[k] = 0.5 * y[k - 1] + u[k - 1] + 0.2 * u[k - 1] ** 2
+    sel = gb.frols(gb.Candidates(ny=1, nu=1, degree=2), gb.Record(u, y), n_terms=3)
+    curve = gb.StaticCurve([1.0, 2.0, 0.5])
+    surface = gb.StaticSurface.fit(gb.StaticPoints(rng.uniform(0.0, 1.0, (8, 2)), rng.uniform(0.0, 1.0, 8),
+                                                   input_names=["a", "b"]), degree=1)
+    cmap = gb.cluster_map(gb.parse_structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "1"]))
+    run = gb.datasets.PumpingPlant().simulate(np.full(5, 1000.0), seed=0)
+    arrays = {f"Selection.{n}": getattr(sel, n) for n in ("err", "theta", "err_evaluated", "rss", "criterion_curve",
+                                                        "subset_rss")}
+    arrays |= {"StaticCurve.coefficients": curve.coefficients, "StaticSurface.coefficients": surface.coefficients,
+               "ClusterMap.R": cmap.R, "PlantRun.y": run.y, "PlantRun.t": run.t, "PE_LAMBDAS": gb.PE_LAMBDAS,
+               "SE_LAMBDAS": gb.SE_LAMBDAS}
+    for name, a in arrays.items():
+        _cannot_be_made_writeable(a, name)
