@@ -146,7 +146,10 @@ def regressor_columns(
     # shorter than y numpy's broadcast error, NaN a silent NaN column. A Record's arrays pass the checks as they are
     if not (isinstance(y, np.ndarray) and y.dtype == np.float64 and y.ndim == 1 and np.isfinite(y).all()):
         y = as_1d_finite(y, "y")
-    if not (isinstance(u, np.ndarray) and u.dtype == np.float64 and u.ndim in (1, 2) and np.isfinite(u).all()):
+    # one input as a column (N, 1) goes through the coercion, which reads it as a Record does (the one input, 1-D):
+    # taken as it is it was input 'u1', and the same samples as a list input 'u'
+    if not (isinstance(u, np.ndarray) and u.dtype == np.float64 and (u.ndim == 1 or (u.ndim == 2 and u.shape[1] != 1))
+            and np.isfinite(u).all()):
         u = as_input_array(u, "u", names)
     n = y.shape[0]
     if u.shape[0] != n:
