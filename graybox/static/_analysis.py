@@ -1225,6 +1225,16 @@ def checked_model(structure: object, theta: object) -> tuple[Structure, np.ndarr
     return structure, check_theta(len(structure), theta)
 
 
+def refuse_surface(structure: Structure, twin: str) -> None:
+    """``ValueError`` for a structure of several inputs given to a function of one input's static curve, naming
+    ``twin``, the surface function that takes it (before ū is read: points of shape (M, m), right for the surface,
+    were told to be levels of one input "as a model of several inputs takes (M, m)")."""
+    if len(structure.input_names) > 1:
+        m = len(structure.input_names)
+        raise ValueError(f"the structure has {m} inputs {structure.input_names}: its static function is a surface, "
+                         f"which graybox.{twin}(structure, theta, ubar) gives at points ū of shape (M, {m})")
+
+
 def one_input_levels(ubar: object, name: str = "ubar") -> np.ndarray:
     """Levels of one input, shape (M,): a number, a 1-D array or a column (M, 1); finite.
 
@@ -1304,6 +1314,7 @@ def static_curve(
     """
     strict = check_bool(strict, "strict")
     structure, th = checked_model(structure, theta)
+    refuse_surface(structure, "static_surface")
     ub = one_input_levels(ubar)
     if y0 is not None:
         y0s = check_per_point(y0, ub.size, "y0")
@@ -1349,6 +1360,7 @@ def static_gain(
         Gain in output units per input unit.
     """
     structure, theta = checked_model(structure, theta)
+    refuse_surface(structure, "static_surface_gain")
     ub = one_input_levels(ubar)
     yb = static_curve(structure, theta, ub, y0=y0, strict=strict)
     cm = cluster_map(structure)  # the curve's own form: one coefficient Σ = Rθ per cluster (p, m)
