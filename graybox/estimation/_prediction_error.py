@@ -75,7 +75,8 @@ from ..core._records import (Dataset, Record, StaticPoints, as_records, carried_
 from ..core._gram import as_gram_records, available_memory, is_dask_data, r_factor
 from ..core._regressors import refuse_non_finite_columns, stacked_regressors
 from ..core._terms import Structure
-from ..selection._centring import _centre_of, centred_data, is_closed, is_held, shift_map, signal_offsets
+from ..selection._centring import (_centre_of, centred_dask, centred_data, dask_levels, is_closed, is_held, shift_map,
+                                   signal_offsets)
 from ..core._validation import (check_bool, check_choice, check_fields, check_int, check_lambdas, check_real, check_theta,
                                 locked, warn)
 
@@ -368,7 +369,9 @@ def _held_level(levels: np.ndarray, held: float) -> float:
 
 def _data(structure: Structure, records: list, points: StaticPoints | None = None) -> _Data:
     """The scaled least-squares data of CLS and PE: :func:`_dynamic` on the signals less their means over the records
-    for a structure closed under shifts (:func:`~graybox.selection._centring.is_closed`, records in memory), as ELS
+    for a structure closed under shifts (:func:`~graybox.selection._centring.is_closed`, records in memory or on Dask,
+    whose blocks are shifted as they are read: fitted raw, a DaskRecord at y + 1e7 was refused as not identifiable
+    where the same samples in memory fit), as ELS
     and the SE fits are, with the map back to θ (``_Data.A``, ``_Data.t``); for a problem whose constraints are made
     on the centred signals too (:func:`centrable`), else the raw :func:`_dynamic`. On the raw signals the regressors of a
     closed quadratic in y at y + 1e6 carry the offset's powers (y(k-1)² ≈ 1e12 for a spread of 25): its round-off,
@@ -377,25 +380,34 @@ def _data(structure: Structure, records: list, points: StaticPoints | None = Non
     zero (centred, its terms would be round-off of nothing) unless static ``points`` tell its terms apart: it is then
     centred on them (:func:`_held_level`; kept at its zero, its terms carried the offset's powers into what only the
     points identify: a PE member's static function at u + 1e5 moved by 6e-5 output units)."""
-    if is_dask_data(records) or not is_closed(structure):
+    if not is_closed(structure):
         return _dynamic(structure, records)
-    recs = as_records(records)
+    lazy = is_dask_data(records)
     try:
-        off = signal_offsets(recs)
-        ys = np.concatenate([r.y for r in recs])
-        us = np.concatenate([r.u.reshape(len(r.y), -1) for r in recs])
+        if lazy:
+            recs = list(records) if isinstance(records, (list, tuple)) else [records]
+            off, held, first = dask_levels(recs)
+            if not all(np.isfinite(v) for v in off.values()):  # a sample not finite: the raw reduction names it
+                return _dynamic(structure, records)
+        else:
+            recs = as_records(records)
+            off = signal_offsets(recs)
+            ys = np.concatenate([r.y for r in recs])
+            us = np.concatenate([r.u.reshape(len(r.y), -1) for r in recs])
+            held = frozenset([n for i, n in enumerate(recs[0].input_names) if is_held(us[:, i])]
+                             + (["y"] if is_held(ys) else []))
+            first = {n: float(us[0, i]) for i, n in enumerate(recs[0].input_names)}
         names = recs[0].input_names
-        held = frozenset([n for i, n in enumerate(names) if is_held(us[:, i])] + (["y"] if is_held(ys) else []))
         off = {k: (0.0 if k in held else v) for k, v in off.items()}
         if points is not None:
             ub = np.asarray(points.ubar, float).reshape(len(points), -1)
             for i, n in enumerate(names):
                 if n in held and ub.shape[1] == len(names):
-                    off[n] = _held_level(ub[:, i], float(us[0, i]))
+                    off[n] = _held_level(ub[:, i], first[n])
         A, t = shift_map(structure, off)
     except (ValueError, KeyError, IndexError):  # records that do not fit the structure: _dynamic says so
         return _dynamic(structure, records)
-    d = _dynamic(structure, centred_data(recs, off, keep=held))
+    d = _dynamic(structure, centred_dask(recs, off) if lazy else centred_data(recs, off, keep=held))
     return replace(d, A=A, t=t, offsets=off)
 
 

@@ -20,7 +20,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from ..core._gram import is_dask_data
+from ..core._gram import DaskRecord, is_dask_data
 from ..core._records import Dataset, Record, as_records
 from ..core._least_squares import column_scales, rank_tolerance
 from ..core._regressors import stacked_regressors
@@ -81,6 +81,31 @@ def search_offsets(data: object) -> dict[str, float]:
                          "centred on its mean it is zero, and a structure search has nothing to rank there; its "
                          "model is the constant alone (which frols and semp choose with centre left out)")
     return offsets
+
+
+def dask_levels(records: Sequence[DaskRecord]) -> tuple[dict[str, float], frozenset, dict[str, float]]:
+    """For Dask records (one input, ``u``): each signal's mean over every sample of every record (as
+    :func:`signal_offsets`; NaN or inf where a sample is not finite), the signals held at one level (:func:`is_held`'s
+    rule) and each signal's first sample, from one pass on the active Dask scheduler."""
+    import dask
+
+    parts = [(a.sum(), a.min(), a.max(), a[0]) for r in records for a in (r.u, r.y)]
+    got = np.array(dask.compute(*[v for p in parts for v in p]), dtype=float).reshape(len(records), 2, 4)
+    size = sum(len(r) for r in records)
+    offsets, held, first = {}, [], {}
+    for j, name in enumerate(("u", "y")):
+        total, lo, hi = got[:, j, 0].sum(), got[:, j, 1].min(), got[:, j, 2].max()
+        offsets[name] = float(total / size)
+        first[name] = float(got[0, j, 3])
+        with np.errstate(invalid="ignore"):  # inf - inf: not held (and the offsets are not finite)
+            if hi - lo <= rank_tolerance(max(abs(lo), abs(hi)), size):
+                held.append(name)
+    return offsets, frozenset(held), first
+
+
+def centred_dask(records: Sequence[DaskRecord], offsets: Mapping[str, float]) -> list[DaskRecord]:
+    """Dask records with u and y less their ``offsets`` (nothing computed: the blocks are shifted as they are read)."""
+    return [DaskRecord(r.u - offsets["u"], r.y - offsets["y"], Ts=r.Ts, name=r.name, units=r.units) for r in records]
 
 
 def _shift_record(rec: Record, offsets: Mapping[str, float], held: frozenset = frozenset()) -> Record:
