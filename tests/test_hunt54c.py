@@ -104,3 +104,15 @@ def test_pe_and_cls_of_a_closed_structure_on_a_dask_record_at_an_offset_are_the_
     a = gb.cls(st, r, points, how="context", constraints=gb.StaticBand()).model
     b = gb.cls(st, big, points, how="context", constraints=gb.StaticBand()).model
     np.testing.assert_allclose(b.theta, a.theta, rtol=1e-7)
+
+
+def test_a_free_run_of_a_dask_record_says_where_one_is_taken():
+    # model.simulate(DaskRecord) and simulate(structure, θ, DaskRecord) said "u must be an array of numbers, got
+    # DaskRecord", where every other entry says which take one and how to make a Record of its samples (7baa7e9)
+    da = pytest.importorskip("dask.array")
+    u = np.random.default_rng(0).uniform(size=100)
+    d = gb.DaskRecord(da.from_array(u, chunks=50), da.from_array(u, chunks=50), name="long")
+    m = gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0])
+    for run in (lambda: m.simulate(d), lambda: gb.simulate(m.structure, m.theta, d)):
+        with pytest.raises(TypeError, match=r"got DaskRecord; .*taken by frols, pe_thetas and cls only.*Record\(r\.u"):
+            run()

@@ -120,8 +120,9 @@ def free_run_inputs(
             y0 = u.y[:L]
         u = u.u
     else:
-        if isinstance(u, Dataset):  # "u must be an array of numbers" said nothing of which record to pass
-            raise TypeError(f"u must be a Record or an array of inputs, got Dataset{record_hint(u)}")
+        # "u must be an array of numbers" said nothing of which record to pass, nor where a DaskRecord is taken
+        if isinstance(u, Dataset) or type(u).__name__ == "DaskRecord":  # by name: core._gram imports this package
+            raise TypeError(f"u must be a Record or an array of inputs, got {type(u).__name__}{record_hint(u)}")
         u = as_input_array(u, "u", names)
         if y0 is None:
             if L > 0:
