@@ -23,54 +23,6 @@ def test_regressor_matrix_reads_one_input_column_as_a_record_does_whatever_its_c
             gb.regressor_matrix(named, col, y)
 
 
-def test_static_values_and_cached_cluster_maps_cannot_be_made_writeable_again():
-    # read-only arrays that own their memory take a.flags.writeable = True (4a5f8bb fixed records, models and static
-    # points only): a StaticSurface's or StaticCurve's coefficients could then be edited in place, and cluster_map's
-    # R, cached and shared by every static analysis of the structure, changed what every later call saw
-    surface = gb.StaticSurface.polynomial({(0, 0): 1.0, (1, 0): 2.0, (0, 1): 3.0})
-    curve = gb.StaticCurve.polynomial([1.0, 2.0])
-    st = gb.parse_structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"])
-    arrays = {"StaticSurface.coefficients": surface.coefficients, "StaticCurve.coefficients": curve.coefficients,
-              "cluster_map(st).R": gb.cluster_map(st).R,
-              "surface_cluster_map(st).R": gb.surface_cluster_map(gb.parse_structure(["y(k-1)", "a(k-1)", "b(k-1)"])).R}
-    for name, a in arrays.items():
-        with pytest.raises(ValueError, match="WRITEABLE"):
-            a.flags.writeable = True
-        assert not a.flags.writeable, name
-    assert surface([[0.0, 0.0]])[0] == 1.0 and curve(0.0) == 1.0
-    assert gb.cluster_map(st).R[0].tolist() == [1.0, 0.0, 0.0, 0.0]
-
-
-def test_frols_selection_arrays_and_pe_lambdas_cannot_be_made_writeable_again():
-    # a Selection's err, theta, rss … and the public default sweep PE_LAMBDAS were read-only arrays owning their
-    # memory: a.flags.writeable = True, then sel.theta[0] = 5 changed the selection (and its model), and
-    # gb.PE_LAMBDAS[:] = 1 every later pe_pareto's default λ1
-    rng = np.random.default_rng(0)
-    u = rng.uniform(-1, 1, (200, 2))
-    y = 0.3 * u[:, 0] + 0.1 * rng.standard_normal(200)
-    sel = gb.frols(gb.Candidates(1, {"a": 1, "b": 1}, degree=1), gb.Record(u, y, input_names=("a", "b")), n_terms=2)
-    arrays = {name: getattr(sel, name) for name in ("err", "theta", "err_evaluated", "rss", "criterion_curve")}
-    arrays["PE_LAMBDAS"] = gb.PE_LAMBDAS
-    for name, a in arrays.items():
-        for target in (a, a.base):
-            if isinstance(target, np.ndarray):
-                with pytest.raises(ValueError, match="WRITEABLE"):
-                    target.flags.writeable = True
-        assert not a.flags.writeable, name
-    assert gb.PE_LAMBDAS[0] == pytest.approx(1e-6) and gb.PE_LAMBDAS[-1] == 1.0 and gb.PE_LAMBDAS.size == 100
-
-
-def test_plant_runs_cannot_be_made_writeable_again():
-    # a run of the bundled plants ("a run is a value") held read-only arrays owning their memory: flags.writeable =
-    # True, then run.u[0] = … edited it, and the Record made of it later
-    one = gb.datasets.PumpingPlant().simulate(np.full(40, 1200.0), seed=0)
-    two = gb.datasets.TwoSpeedPumpingPlant().simulate(np.full((40, 2), 1200.0), seed=0)
-    for run in (one, two):
-        for name in ("u", "y", "speed", "flow", "surge"):
-            with pytest.raises(ValueError, match="WRITEABLE"):
-                getattr(run, name).flags.writeable = True
-
-
 @pytest.mark.parametrize("fn, twin", [("static_curve", "static_surface"), ("static_gain", "static_surface_gain")])
 def test_the_one_input_static_functions_send_a_structure_of_several_inputs_to_the_surface_functions(fn, twin):
     # gb.static_curve(structure of u1, u2, θ, points of shape (M, 2)) said "ubar must be levels of the one input …:

@@ -35,5 +35,9 @@ def test_arrays_of_selections_curves_surfaces_cluster_maps_and_plant_runs_cannot
     arrays |= {"StaticCurve.coefficients": curve.coefficients, "StaticSurface.coefficients": surface.coefficients,
                "ClusterMap.R": cmap.R, "PlantRun.y": run.y, "PlantRun.t": run.t, "PE_LAMBDAS": gb.PE_LAMBDAS,
                "SE_LAMBDAS": gb.SE_LAMBDAS}
+    # (hunt54c found the same, and these besides: the surfaces' cluster map, the two-input plant's run, a run's fields)
+    two = gb.datasets.TwoSpeedPumpingPlant().simulate(np.full((5, 2), 1200.0), seed=0)
+    arrays |= {"surface_cluster_map.R": gb.surface_cluster_map(gb.parse_structure(["y(k-1)", "a(k-1)", "b(k-1)"])).R}
+    arrays |= {f"{type(r).__name__}.{n}": getattr(r, n) for r in (run, two) for n in ("u", "speed", "flow", "surge")}
     for name, a in arrays.items():
         _cannot_be_made_writeable(a, name)
