@@ -41,3 +41,22 @@ def test_arrays_of_selections_curves_surfaces_cluster_maps_and_plant_runs_cannot
     arrays |= {f"{type(r).__name__}.{n}": getattr(r, n) for r in (run, two) for n in ("u", "speed", "flow", "surge")}
     for name, a in arrays.items():
         _cannot_be_made_writeable(a, name)
+
+
+@pytest.mark.parametrize("col", ["t [2h]", "t [1hr]", "t [0.5d]", "t [1 x 10^-3 s]", "t [s/1e3]", "t [1/1e3 s]",
+                                 "t [10usec]"])
+def test_a_time_column_in_ticks_of_any_named_unit_or_a_written_power_is_refused(tmp_path, col):
+    """d24eecb: a tick's unit came from a shorter list than a bare unit's, so 't [2 h]' was refused but 't [2h]',
+    't [1hr]', 't [0.5d]' were read as seconds (Ts = 1 s for 2 hours, without a word); an ASCII 'x' for the
+    multiplication ('1 x 10^-3 s') and a fraction written as a power ('s/1e3') were not read either."""
+    p = tmp_path / "r.csv"
+    p.write_text(f"{col};u;y\n" + "".join(f"{k};{k % 3};{0.5 * k}\n" for k in range(8)), encoding="utf-8")
+    with pytest.raises(ValueError, match="but time stamps are read as seconds"):
+        gb.load_record_csv(p, u="u", y="y", time=col)
+
+
+@pytest.mark.parametrize("col", ["t [1 s]", "t [1s]", "t [1.0 sec]", "t [1 second]", "t [s]", "time (x)", "t_s"])
+def test_a_time_column_in_seconds_is_read_beside_the_longer_tick_units(tmp_path, col):
+    p = tmp_path / "r.csv"
+    p.write_text(f"{col};u;y\n" + "".join(f"{k / 2};{k % 3};{0.5 * k}\n" for k in range(8)), encoding="utf-8")
+    assert gb.load_record_csv(p, u="u", y="y", time=col).Ts == 0.5

@@ -942,17 +942,19 @@ def _input_columns(p: Path, u: object, y: object, input_names: object) -> tuple[
 
 #: A time column's name that states a unit other than seconds: "t [ms]", "time (min)", "t_ms", "Zeit/h".
 _TICK_NUMBER = r"(?:\d+(?:[.,]\d+)?|[.,]\d+)"
-#: a tick's power of ten as it is written: 1e-3, 10^-3, 10**-3, 1·10^-3, 10⁻³
-_TICK_POWER = (r"(?:e[-+−]?\d+|(?:\s*[·*×]\s*10)?\s*(?:\^|\*\*)\s*[-+−]?\d+"
-               r"|(?:\s*[·*×]\s*10)?\s*[⁻⁺]?[⁰¹²³⁴⁵⁶⁷⁸⁹]+)")
-_TICK_FRACTION = r"(?:\s*/\s*" + _TICK_NUMBER + ")"
-_TICK_UNIT = r"(?:s|sec|secs|seconds?|ms|msec|us|µs|μs|ns|min)"
-_TIME_UNIT = re.compile(r"(?:[\[(]\s*|[_/ -])(ms|msec|millis(?:econds?)?|us|µs|μs|usec|micros(?:econds?)?|ns|"
-                        r"min|mins|minutes?|h|hr|hrs|hours?|d|days?)\s*[\])]?\s*$"
+#: a tick's power of ten as it is written: 1e-3, 10^-3, 10**-3, 1·10^-3, 1 x 10^-3, 10⁻³
+_TICK_POWER = (r"(?:e[-+−]?\d+|(?:\s*[·*×x]\s*10)?\s*(?:\^|\*\*)\s*[-+−]?\d+"
+               r"|(?:\s*[·*×x]\s*10)?\s*[⁻⁺]?[⁰¹²³⁴⁵⁶⁷⁸⁹]+)")
+_TICK_FRACTION = r"(?:\s*/\s*" + _TICK_NUMBER + _TICK_POWER + "?)"
+#: the units other than seconds a name may give, bare ("t [h]") or with a tick's number ("t [2h]")
+_OTHER_UNITS = (r"ms|msec|millis(?:econds?)?|us|µs|μs|usec|micros(?:econds?)?|ns|min|mins|minutes?|h|hr|hrs|hours?|d|"
+                r"days?")
+_TICK_UNIT = rf"(?:s|secs?|seconds?|{_OTHER_UNITS})"
+_TIME_UNIT = re.compile(rf"(?:[\[(]\s*|[_/ -])({_OTHER_UNITS})\s*[\])]?\s*$"
                         # a tick of a PLC or logger: "Zeit [10ms]", "t (0.1 s)", "t [1/10 s]", "t [1e-3 s]", "t [10^-3 s]",
-                        # "t [10⁻³ s]", "t [s/10]", "time [100 µs]" (but "[1 s]" is seconds)
+                        # "t [10⁻³ s]", "t [s/10]", "time [100 µs]", "t [2h]" (but "[1 s]" is seconds)
                         r"|[\[(]\s*((?!1(?:[.,]0*)?\s*(?:s|secs?|seconds?)\s*[\])])"
-                        rf"(?:{_TICK_NUMBER}{_TICK_POWER}?{_TICK_FRACTION}?\s*[·*×]?\s*{_TICK_UNIT}{_TICK_FRACTION}?"
+                        rf"(?:{_TICK_NUMBER}{_TICK_POWER}?{_TICK_FRACTION}?\s*[·*×x]?\s*{_TICK_UNIT}{_TICK_FRACTION}?"
                         rf"|{_TICK_UNIT}{_TICK_FRACTION}))"
                         r"\s*[\])]\s*$", re.IGNORECASE)
 
