@@ -60,3 +60,23 @@ def test_a_time_column_in_seconds_is_read_beside_the_longer_tick_units(tmp_path,
     p = tmp_path / "r.csv"
     p.write_text(f"{col};u;y\n" + "".join(f"{k / 2};{k % 3};{0.5 * k}\n" for k in range(8)), encoding="utf-8")
     assert gb.load_record_csv(p, u="u", y="y", time=col).Ts == 0.5
+
+
+def _tiny_input_record():
+    rng = np.random.default_rng(0)
+    u = rng.uniform(0.5, 1.5, 60)
+    y = np.zeros(60)
+    for k in range(1, 60):
+        y[k] = 0.5 * y[k - 1] + u[k - 1] + 0.3 * u[k - 1] ** 2
+    return gb.Record(u * 1e-160, y + 0.01 * rng.standard_normal(60), name="tiny input")
+
+
+def test_frols_refuses_a_parameter_beyond_the_float_range_naming_its_term_as_els_and_semp_do():
+    """An input of about 1e-160 (u(k-1)^2 about 1e-320) beside an output of 1: ELS, semp, CLS and PE refuse the
+    θ of about 1e320 with beyond_float_range (f53f10c, 7d9347f), naming the term, but frols chose the term and failed
+    in its Selection on 'theta has non-finite values at [2]', naming an index and no remedy."""
+    rec = _tiny_input_record()
+    with pytest.raises(ValueError, match=r"frols: .*\['u\(k-1\)\^2'\] are beyond the float range .*rescale"):
+        gb.frols(gb.Candidates(ny=1, nu=1, degree=2), rec, n_terms=3)
+    with pytest.raises(ValueError, match=r"\['u\(k-1\)\^2'\] are beyond the float range"):
+        gb.els(["y(k-1)", "u(k-1)", "u(k-1)^2"], rec)
