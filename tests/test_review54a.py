@@ -80,3 +80,21 @@ def test_frols_refuses_a_parameter_beyond_the_float_range_naming_its_term_as_els
         gb.frols(gb.Candidates(ny=1, nu=1, degree=2), rec, n_terms=3)
     with pytest.raises(ValueError, match=r"\['u\(k-1\)\^2'\] are beyond the float range"):
         gb.els(["y(k-1)", "u(k-1)", "u(k-1)^2"], rec)
+
+
+def test_an_object_array_in_a_dataset_s_extra_cannot_be_edited_through_a_read():
+    """locked() copies an object array read-only (its memory cannot be a bytes buffer), and a read-only array that owns
+    its memory is made writeable by ``a.flags.writeable = True``: an edit of Dataset.extra['tags'] then changed the
+    frozen value. A FrozenMap hands such an array out as a fresh read-only copy at each read, as it does a table."""
+    rec = gb.Record(np.linspace(0.0, 1.0, 12), np.linspace(1.0, 2.0, 12), name="r")
+    data = gb.Dataset(rec, rec, extra={"tags": np.array(["a", 1], dtype=object),
+                                       "nested": [np.array([None, "b"], dtype=object)]})
+    for read in (lambda: data.extra["tags"], lambda: data.extra["nested"][0]):
+        a = read()
+        assert not a.flags.writeable
+        if not a.flags.owndata and a.base is not None:
+            continue
+        a.flags.writeable = True  # allowed on an array owning its memory: the edit must not reach the value
+        first = a[0]
+        a[0] = "changed"
+        assert read()[0] == first

@@ -601,7 +601,8 @@ def as_1d_finite(x: object, name: str) -> np.ndarray:
 def locked(a: np.ndarray) -> np.ndarray:
     """A copy of ``a`` (shape and dtype kept) that nothing can make writeable again: its memory is an immutable
     ``bytes`` object, so ``flags.writeable = True`` is refused on it and on its base (a read-only array that owns its
-    memory could be made writeable, and a value edited in place through it). Object arrays are copied read-only."""
+    memory could be made writeable, and a value edited in place through it). Object arrays are copied read-only (a
+    :class:`FrozenMap` hands them out as fresh copies: a reader can make one writeable)."""
     a = np.asarray(a)
     if a.dtype.hasobject:
         x = a.copy()
@@ -620,11 +621,17 @@ def _is_pandas(x: object) -> bool:
     return type(x).__module__.startswith("pandas") and type(x).__name__ in ("DataFrame", "Series")
 
 
+def _is_object_array(x: object) -> bool:
+    """An object array: read-only, but owning its memory (no bytes buffer holds objects), so a reader could make it
+    writeable again (:func:`locked`); handed out fresh, as a table is."""
+    return isinstance(x, np.ndarray) and x.dtype.hasobject
+
+
 def _holds_pandas(x: object, _seen: set | None = None) -> bool:
-    """Whether ``x`` is a pandas DataFrame or Series or holds one in its lists and tuples (a mapping inside is a
-    FrozenMap of its own, which hands out its own tables fresh); each list or tuple looked at once (one that holds
-    itself, given to a FrozenMap directly, ends)."""
-    if _is_pandas(x):
+    """Whether ``x`` is a pandas DataFrame or Series (or an object array) or holds one in its lists and tuples (a
+    mapping inside is a FrozenMap of its own, which hands out its own tables fresh); each list or tuple looked at once
+    (one that holds itself, given to a FrozenMap directly, ends)."""
+    if _is_pandas(x) or _is_object_array(x):
         return True
     if not isinstance(x, (list, tuple)):
         return False
@@ -636,9 +643,12 @@ def _holds_pandas(x: object, _seen: set | None = None) -> bool:
 
 
 def _fresh(x: object) -> object:
-    """``x`` with each pandas table in it (in its lists and tuples) a fresh copy; all else as it is (frozen)."""
+    """``x`` with each pandas table and object array in it (in its lists and tuples) a fresh copy; all else as it is
+    (frozen)."""
     if _is_pandas(x):
         return x.copy(deep=True)  # type: ignore[attr-defined]
+    if _is_object_array(x):
+        return locked(x)
     if isinstance(x, FrozenList):
         return FrozenList(_fresh(v) for v in x)
     if isinstance(x, list):
