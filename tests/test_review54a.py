@@ -98,3 +98,24 @@ def test_an_object_array_in_a_dataset_s_extra_cannot_be_edited_through_a_read():
         first = a[0]
         a[0] = "changed"
         assert read()[0] == first
+
+
+def test_values_pickled_or_deep_copied_keep_their_arrays_locked():
+    """numpy pickles and deep-copies an array as a fresh writeable one, and a frozen value restores its fields as
+    given: a Record or Model through pickle (a process pool, a Dask worker) or copy.deepcopy had writeable arrays,
+    ``copy.deepcopy(model).theta[0] = 5`` an edit of a frozen value without even a flag."""
+    import copy
+    import pickle
+
+    rec = gb.Record(np.linspace(0.0, 1.0, 12), np.linspace(1.0, 2.0, 12), name="r")
+    data = gb.Dataset(rec, rec, static=gb.StaticPoints([1.0, 2.0], [3.0, 4.0], uncertainty=[0.1, 0.2]))
+    model = gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0])
+    curve = gb.StaticCurve([1.0, 2.0, 0.5])
+    for how in (lambda o: pickle.loads(pickle.dumps(o)), copy.deepcopy):
+        d2, m2, c2 = how(data), how(model), how(curve)
+        arrays = {"Record.y": d2.ident.y, "Record.u": d2.valid.u, "StaticPoints.ybar": d2.static.ybar,
+                  "StaticPoints.uncertainty": d2.static.uncertainty, "Model.theta": m2.theta,
+                  "StaticCurve.coefficients": c2.coefficients}
+        for name, a in arrays.items():
+            _cannot_be_made_writeable(a, name)
+        assert np.array_equal(m2.theta, model.theta) and np.array_equal(d2.ident.y, rec.y)

@@ -34,6 +34,7 @@ from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, 
 from ..core._terms import Structure, check_input_names
 from ..core._transient import steady_levels
 from ..core._reprs import exact_text, listed
+from ..core._validation import Relocked
 from ..core._validation import (check_count, check_band_finite, check_band_values, check_choice, check_fields, check_int,
                                 check_per_point, check_real, check_seed, frozen, real_array, warn)
 from ..models._coerce import as_model
@@ -158,7 +159,7 @@ def _dominant(poles: np.ndarray, Ts: float, unit: bool = False) -> tuple[complex
 
 
 @dataclass(frozen=True, eq=False)
-class LocalModel:
+class LocalModel(Relocked):
     """The linearisation of a NARX model around the equilibrium it reaches at a constant input.
 
     Attributes
@@ -759,7 +760,7 @@ def local_model(model: Model, ubar: float | Sequence[float] | np.ndarray, *, Ts:
 
 
 @dataclass(frozen=True, eq=False)
-class OperatingCurve:
+class OperatingCurve(Relocked):
     """Local models along the static curve: gain, time constant and damping against ū.
 
     Attributes

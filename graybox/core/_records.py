@@ -19,6 +19,7 @@ import numpy as np
 
 from ._reprs import listed, range_text
 from ._terms import check_input_names, default_input_names, transient_source
+from ._validation import Relocked
 from ._validation import (as_1d_finite, locked, check_int, check_per_point, check_real, check_str, float_array, frozen_value,
                           refuse_non_real, warn)
 
@@ -161,7 +162,7 @@ def _lengths(name: str, u_name: str, y_name: str, u: np.ndarray, y: np.ndarray) 
 # eq=False here and on every value holding arrays: == on arrays has no single truth value, so these
 # compare by identity and hash, as Model and the results do
 @dataclass(frozen=True, eq=False)
-class Record:
+class Record(Relocked):
     """One dynamic experiment: input ``u`` and output ``y`` sampled every ``Ts`` seconds.
 
     Parameters
@@ -271,7 +272,7 @@ class Record:
 
 
 @dataclass(frozen=True, eq=False)
-class StaticPoints:
+class StaticPoints(Relocked):
     """Measured steady states: at constant input ``ubar[i]`` the output settled at ``ybar[i]``.
 
     Parameters
@@ -985,7 +986,7 @@ def _window_hashes(h: np.ndarray, width: int) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False)
-class RecordPrint:
+class RecordPrint(Relocked):
     """A record's fingerprint, kept where its samples are not (a Pareto set saved to a file): enough to
     recognise the record, a copy of it and slices of it (:func:`check_print_overlap`) as
     :func:`same_record` and :func:`check_overlap` recognise them with the samples at hand.

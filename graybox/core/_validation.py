@@ -611,6 +611,36 @@ def locked(a: np.ndarray) -> np.ndarray:
     return np.frombuffer(np.ascontiguousarray(a).tobytes(), dtype=a.dtype).reshape(a.shape)
 
 
+def _relocked(v: object) -> object:
+    """``v`` with its arrays :func:`locked` again (in tuples, frozen lists and maps too): how a value restored from a
+    pickle or a deep copy gets back what numpy's own pickling and copying drop (they give writeable arrays)."""
+    if isinstance(v, np.ndarray):
+        return locked(v)
+    if isinstance(v, FrozenMap):
+        return FrozenMap({k: _relocked(x) for k, x in v._items.items()})
+    if isinstance(v, FrozenList):
+        return FrozenList(_relocked(x) for x in v)
+    if type(v) is tuple:
+        return tuple(_relocked(x) for x in v)
+    if isinstance(v, tuple) and hasattr(type(v), "_make"):
+        return type(v)._make(_relocked(x) for x in v)
+    return v
+
+
+class Relocked:
+    """A base of the immutable values that hold arrays: restored from a pickle (a process pool, a Dask worker) or by
+    ``copy.deepcopy``, their arrays are :func:`locked` again (numpy restores an array writeable, and a frozen
+    dataclass takes its fields back as they come, so ``copy.deepcopy(model).theta[0] = 5`` edited a frozen value)."""
+
+    __slots__ = ()
+
+    def __setstate__(self, state: Any) -> None:
+        if isinstance(state, tuple):  # (__dict__, __slots__ values) of a class with slots
+            state = {**(state[0] or {}), **(state[1] or {})}
+        for k, v in state.items():
+            object.__setattr__(self, k, _relocked(v))
+
+
 def frozen(a: object, dtype: type = float) -> np.ndarray:
     """A read-only copy of ``a`` (:func:`locked`): how every immutable value in graybox stores its arrays."""
     return locked(np.asarray(a, dtype=dtype))

@@ -202,6 +202,7 @@ import numpy as np
 
 from ..core._files import write_atomically
 from ..core._records import Record, StaticPoints
+from ..core._validation import Relocked
 from ..core._validation import (as_1d_finite, check_bool, check_count, check_int, check_real, check_seed, locked,
                                 real_array)
 from ..reference import EQ1_COEFFICIENTS
@@ -260,7 +261,7 @@ def initial_state(x0: object, names: tuple[str, ...]) -> tuple[float, ...]:
 
 
 @dataclass(frozen=True, eq=False)
-class PlantRun:
+class PlantRun(Relocked):
     """The result of one simulation, all arrays of shape (N,) sampled at t = k Ts.
 
     Attributes

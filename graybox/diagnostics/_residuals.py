@@ -81,6 +81,7 @@ from ..core._regressors import record_signals, regressor_matrix
 from ..core._simulation_kernels import inverse_ma_filter
 from ..core._reprs import percent_text
 from ..estimation._extended_least_squares import _ma_invertible, _ma_text
+from ..core._validation import Relocked
 from ..core._validation import (FrozenMap, check_agrees, check_bool, check_choice, check_fields, check_int, check_level,
                                 check_real, frozen, warn)
 
@@ -114,7 +115,7 @@ def _label_of(name: str) -> str:
 
 
 @dataclass(frozen=True, eq=False)
-class CorrelationTest:
+class CorrelationTest(Relocked):
     """One correlation test over its lags.
 
     Attributes
@@ -200,7 +201,7 @@ class CorrelationTest:
 
 
 @dataclass(frozen=True, eq=False)
-class ResidualTests:
+class ResidualTests(Relocked):
     """The result of :func:`residual_tests`: five correlation tests of one model's residuals.
 
     Attributes

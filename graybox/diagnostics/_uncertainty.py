@@ -74,6 +74,7 @@ from ..static._analysis import one_input_levels, reached_equilibria
 from ..static._linearisation import static_gain_gradient, static_gains, static_powers, static_theta_gradient_of
 from ..static._surface_analysis import points_of_inputs, reached_surface, static_surface
 from ..core._reprs import share_text
+from ..core._validation import Relocked
 from ..core._validation import (check_count, check_band_finite, check_band_values, check_choice, check_fields, check_int,
                                 check_level, check_real, check_seed, frozen, warn)
 
@@ -145,7 +146,7 @@ def warn_dropped_draws(what: str, undefined: np.ndarray) -> None:
 
 
 @dataclass(frozen=True, eq=False)
-class ParameterUncertainty:
+class ParameterUncertainty(Relocked):
     """Covariance and confidence intervals of a model's process parameters.
 
     Attributes
@@ -1141,7 +1142,7 @@ def _free_run_factor(problem: SEProblem, theta: np.ndarray, w1: float) -> np.nda
 # static curve and gain
 # --------------------------------------------------------------------------------------------
 @dataclass(frozen=True, eq=False)
-class StaticCurveBand:
+class StaticCurveBand(Relocked):
     """Confidence band of a model's static curve ȳ(ū) and static gain dȳ/dū.
 
     Attributes
@@ -1202,7 +1203,7 @@ class StaticCurveBand:
 
 
 @dataclass(frozen=True, eq=False)
-class StaticSurfaceBand:
+class StaticSurfaceBand(Relocked):
     """Confidence band of a model's static surface ȳ(ū) and its gains ∂ȳ/∂ū_i (several inputs).
 
     Attributes

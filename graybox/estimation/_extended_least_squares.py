@@ -92,6 +92,7 @@ from ..selection._centring import centred_data, is_closed, raw_theta, signal_off
 from ..core._records import Dataset, Record, carried_from
 from ..core._regressors import regressor_matrix, stacked_regressors
 from ..core._terms import Structure, Term
+from ..core._validation import Relocked
 from ..core._validation import (check_bool, check_int, check_real, check_fields, check_sequence, check_str, frozen,
                                 short_value, warn)
 
@@ -106,7 +107,7 @@ class ELSConvergenceWarning(RuntimeWarning):
 
 
 @dataclass(frozen=True, eq=False)
-class ELSResult:
+class ELSResult(Relocked):
     """The result of :func:`els`: the model and how the iteration went.
 
     Attributes

@@ -131,6 +131,7 @@ from scipy.optimize import brentq
 from ..core._least_squares import output_spread
 from ..core._records import (Dataset, Record, as_records, carried_from, check_fitted_on, check_units, require_lengths,
                              require_record)
+from ..core._validation import Relocked
 from ..core._validation import (check_bool, check_choice, check_int, check_per_point, check_real,
                                 check_seed, check_str, frozen, check_fields, real_array, short_value)
 from ..core._simulation import DivergenceError, default_bound, free_run_inputs
@@ -378,7 +379,7 @@ def _damped_solve(R, G, mu):  # pragma: no cover - compiled
 # ---------------------------------------------------------------------------
 
 @dataclass(frozen=True, eq=False)
-class NeuralModel:
+class NeuralModel(Relocked):
     """A one-hidden-layer tanh perceptron NAR(MA)X model as an immutable value.
 
     All weights act on normalised signals (see the module docstring); every method takes and
@@ -791,7 +792,7 @@ class NeuralModel:
 # ---------------------------------------------------------------------------
 
 @dataclass(frozen=True, eq=False)
-class NeuralFit:
+class NeuralFit(Relocked):
     """The result of :func:`neural_narx`: the trained network and how the training went.
 
     Costs are in normalised units (output divided by its standard deviation over the training

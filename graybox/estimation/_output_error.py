@@ -48,6 +48,7 @@ from ..core._progress import progress_bar
 from ..core._records import (Dataset, Record, as_records, carried_from, check_alike, check_overlap, choosing_records,
                              same_record)
 from ..core._terms import Structure
+from ..core._validation import Relocked
 from ..core._validation import (FrozenFrame, FrozenMap, check_bool, check_choice, check_fields, check_int,
                                 check_margin_value, check_mean_square, check_real, check_seed, check_str, check_theta)
 from ..models._coerce import as_structure
@@ -64,7 +65,7 @@ START_COLUMNS = ("start", "solver", "status", "message", "JS_start", "JS", "JS_c
 
 
 @dataclass(frozen=True, eq=False)
-class OEResult:
+class OEResult(Relocked):
     """The result of :func:`output_error`.
 
     Attributes

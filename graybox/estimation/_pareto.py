@@ -19,6 +19,7 @@ from ..models._coerce import as_structure
 from ..models._model import Model, model_input_names
 from ..core._records import (Dataset, Record, RecordPrint, StaticPoints, as_records, carried_from, check_fitted_on,
                              check_units, record_print)
+from ..core._validation import Relocked
 from ..core._validation import (FrozenMap, check_bool, check_fields, check_int, check_mean_square, check_real,
                                 check_weight, frozen, real_array)
 from ..core._terms import Structure
@@ -78,7 +79,7 @@ def _failures(method: object, extra: object, failures: object, K: int) -> dict[i
 
 
 @dataclass(frozen=True, eq=False)
-class ParetoSet:
+class ParetoSet(Relocked):
     """Members of a bi-objective estimate of one structure.
 
     Attributes

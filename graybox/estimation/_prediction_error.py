@@ -77,6 +77,7 @@ from ..core._regressors import refuse_non_finite_columns, stacked_regressors
 from ..core._terms import Structure
 from ..selection._centring import (_centre_of, centred_dask, centred_data, dask_levels, is_closed, is_held, shift_map,
                                    signal_offsets)
+from ..core._validation import Relocked
 from ..core._validation import (check_bool, check_choice, check_fields, check_int, check_lambdas, check_real, check_theta,
                                 locked, warn)
 
@@ -205,7 +206,7 @@ def qr_static_error(structure: Structure, thetas: np.ndarray, points: StaticPoin
 
 
 @dataclass(frozen=True, eq=False)
-class CLSResult:
+class CLSResult(Relocked):
     """The result of :func:`cls`: the model and what was imposed on it.
 
     Attributes

@@ -73,6 +73,7 @@ from ..core._gram import (
 from ..core._least_squares import (beyond_float_range, binary_scaled, one_blas_thread, unscaled_rss,
                                    unscaled_theta)
 from ..core._regressors import check_structure_inputs, record_signals
+from ..core._validation import Relocked
 from ..core._validation import (as_1d_finite, check_bool, check_choice, check_fields, check_int, check_mean_square, check_real,
                                 check_theta, locked, warn)
 from ._stopping import choose_model, stop_rule, FewerTermsError, StopRule
@@ -164,7 +165,7 @@ def information_criterion(name: str, rss: np.ndarray, n_rows: int) -> np.ndarray
 
 
 @dataclass(frozen=True, eq=False)
-class Selection:
+class Selection(Relocked):
     """The result of :func:`frols`: an immutable value.
 
     Attributes

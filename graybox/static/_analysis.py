@@ -67,6 +67,7 @@ from ._equilibrium_kernels import (
     settle_runs,
 )
 from ..core._terms import Structure, Term, structure_of
+from ..core._validation import Relocked
 from ..core._validation import (as_1d_finite, check_bool, check_fields, check_per_point, check_real,
                                 check_theta, locked, real_array)
 from ..core._reprs import LISTED, point_texts, short_repr
@@ -183,7 +184,7 @@ def ascii_cluster_name(name: object, *, single_input: bool) -> object:
 
 
 @dataclass(frozen=True, eq=False)
-class ClusterMap:
+class ClusterMap(Relocked):
     """The clusters of a structure and the 0/1 map R with Σ = R θ.
 
     Attributes
@@ -631,7 +632,7 @@ def roots_and_stability(structure: Structure, thetas: np.ndarray, ubar: np.ndarr
 
 
 @dataclass(frozen=True)
-class Equilibrium:
+class Equilibrium(Relocked):
     """A real steady state of a model at constant input.
 
     Attributes

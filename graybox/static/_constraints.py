@@ -48,6 +48,7 @@ from ._surfaces import StaticSurface, box_grid
 from ._analysis import ClusterMap, cluster_map, cluster_name, denominator_vanishes, is_rational, vanishing_denominator
 from ._surface_analysis import SurfaceClusterMap, surface_cluster_map, surface_static_rows
 from ..core._terms import Structure, transient_source
+from ..core._validation import Relocked
 from ..core._validation import FrozenMap, check_choice, check_int, check_real, check_sequence, check_str, short_value
 from ..core._reprs import level_texts, short_repr
 
@@ -323,7 +324,7 @@ class AffineRows:
 # --------------------------------------------------------------------------------------------
 # the base class
 # --------------------------------------------------------------------------------------------
-class StaticConstraint(ABC):
+class StaticConstraint(Relocked, ABC):
     """A constraint on θ that depends on the problem's data; combine with ``&``."""
 
     @abstractmethod

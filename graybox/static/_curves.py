@@ -8,6 +8,7 @@ import numpy as np
 
 from ..core._least_squares import scaled_lstsq
 from ..core._records import StaticPoints, outside_range
+from ..core._validation import Relocked
 from ..core._validation import as_1d_finite, check_int, check_real, check_str, locked, real_array
 from ..core._reprs import listed, short_repr
 
@@ -15,7 +16,7 @@ __all__ = ["StaticCurve", "fit_on_powers"]
 
 
 @dataclass(frozen=True, eq=False)
-class StaticCurve:
+class StaticCurve(Relocked):
     """A polynomial static curve H(ū) = c0 + c1 ū + c2 ū² + … (engineering units).
 
     Attributes

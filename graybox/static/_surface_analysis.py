@@ -36,6 +36,7 @@ from ._linearisation import input_monomials_of, static_gains, static_powers, sta
 from ..core._records import frame_inputs, labelled_point
 from ..core._terms import Structure, Term, check_input_names, require_inputs, structure_of
 from ..core._transient import steady_levels
+from ..core._validation import Relocked
 from ..core._validation import check_bool, check_fields, check_per_point, frozen, real_array
 from ..core._renamed import RenamedAttribute
 from ..core._reprs import short_repr
@@ -101,7 +102,7 @@ def _spellings(p: int, powers: tuple[int, ...], inputs: tuple[str, ...]) -> set[
 
 
 @dataclass(frozen=True, eq=False)
-class SurfaceClusterMap:
+class SurfaceClusterMap(Relocked):
     """The clusters Ω_{y^p u1^a1 ⋯ um^am} of a structure with several inputs and the 0/1 map R (Σ = R θ).
 
     Attributes

@@ -16,6 +16,7 @@ import numpy as np
 from ..core._least_squares import scaled_lstsq
 from ..core._records import StaticPoints, frame_inputs, outside_range
 from ..core._terms import check_input_names
+from ..core._validation import Relocked
 from ..core._validation import as_1d_finite, check_int, check_real, check_sequence, check_str, locked, real_array
 from ..core._reprs import listed, short_repr
 
@@ -99,7 +100,7 @@ def _exponent_vectors(value: object, name: str) -> tuple[tuple[int, ...], ...]:
 
 
 @dataclass(frozen=True, eq=False)
-class StaticSurface:
+class StaticSurface(Relocked):
     """A polynomial static surface H(ū) = Σ_e c_e ū₁^e₁ … ū_m^e_m (engineering units).
 
     Attributes
