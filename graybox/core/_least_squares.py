@@ -146,9 +146,10 @@ def scaled_lstsq(A: np.ndarray, b: np.ndarray, rcond: float | None = None) -> np
 
 def beyond_float_range(which: str, prefix: str = "") -> ValueError:
     """The error of a fit whose parameters ``which`` (columns, terms) are beyond the float range: columns far too
-    small beside the target in the signals' units (u(k-1)² of an input of 1e-160 is 1e-320, its θ 1e320)."""
+    small beside the target in the signals' units (u(k-1)² of an input of 1e-160 is 1e-320, its θ 1e320), or far
+    too large (an input of 1e153 beside an output of 1e-20: a θ of 1e-327, below the normal floats)."""
     return ValueError(f"{prefix}the parameter(s) of {which} are beyond the float range (those columns are too small "
-                      "beside the target in these units: rescale the signals)")
+                      "or too large beside the target in these units: rescale the signals)")
 
 
 def rank_tolerance(largest: float, rows: int, n: int = 0) -> float:
@@ -297,13 +298,16 @@ def binary_scaled(data: object, process: Structure) -> tuple[object, dict[str, i
 
 
 def unscaled_theta(theta: np.ndarray, terms: Sequence[Term], exps: Mapping[str, int]) -> np.ndarray:
-    """θ on the data's own signals of a fit on the signals times 2^-e (:func:`binary_scaled`): inf or 0 where it
-    leaves the float range (callers refuse it: :func:`beyond_float_range`)."""
+    """θ on the data's own signals of a fit on the signals times 2^-e (:func:`binary_scaled`): inf where it leaves
+    the float range above, NaN where a nonzero θ leaves it below (ldexp's 0 or few-bit subnormal would drop the term
+    without a word); callers refuse both (:func:`beyond_float_range`)."""
     if not exps:
         return theta
-    with np.errstate(over="ignore", under="ignore"):  # a θ beyond the range is refused by the Selection, named
-        return np.ldexp(theta, np.array([exps["y"] - sum(p * exps.get(s, 0) for s, _, p in t.factors) for t in terms],
-                                        dtype=int))
+    theta = np.asarray(theta, dtype=float)
+    with np.errstate(over="ignore", under="ignore"):  # a θ beyond the range is refused by the caller, named
+        out = np.ldexp(theta, np.array([exps["y"] - sum(p * exps.get(s, 0) for s, _, p in t.factors) for t in terms],
+                                       dtype=int))
+    return np.where((theta != 0) & (np.abs(out) < np.finfo(float).tiny), np.nan, out)
 
 
 def unscaled_rss(rss: np.ndarray, exps: Mapping[str, int]) -> np.ndarray:
