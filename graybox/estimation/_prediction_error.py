@@ -77,9 +77,8 @@ from ..core._regressors import refuse_non_finite_columns, stacked_regressors
 from ..core._terms import Structure
 from ..selection._centring import (_centre_of, centred_dask, centred_data, dask_levels, is_closed, is_held, shift_map,
                                    signal_offsets)
-from ..core._validation import Relocked
-from ..core._validation import (check_bool, check_choice, check_fields, check_int, check_lambdas, check_real, check_theta,
-                                locked, warn)
+from ..core._validation import (Relocked, check_bool, check_choice, check_fields, check_int, check_lambdas, check_real,
+                                check_theta, locked, warn)
 
 if TYPE_CHECKING:  # cvxpy (and the scipy.stats it imports) takes seconds to import: loaded by the QP paths only
     import cvxpy as cp
