@@ -3,7 +3,10 @@
 CSV conventions (all loaders): one header line naming the columns (line 1, or the line after the
 ``skiprows=N`` lines of a data logger's header block, or after Excel's ``sep=;`` line, whose delimiter
 is used; a block not skipped is refused with the line that names the columns), one sample per line, numbers
-in any form Python's ``float`` reads. Files as spreadsheets export them are read: the delimiter
+in any form Python's ``float`` reads. A Campbell Scientific TOA5 file (LoggerNet's and CardConvert's ASCII
+format: line 1 starts ``TOA5``, then the column names, their units, the processing codes such as ``Smp`` and
+``Avg``, then the samples) is read without options, its units row as ``units_row=True`` reads one; its binary
+TOB1/TOB2/TOB3 files are refused, naming how to convert them to TOA5. Files as spreadsheets export them are read: the delimiter
 (``,`` ``;`` or tab) and the decimal mark (``.`` or ``,``) are detected from the header and the
 first lines (``delimiter=`` and ``decimal=`` override). The text is UTF-8 (a byte-order mark
 skipped), UTF-16 or UTF-32 when a byte-order mark says so (Excel's "Unicode text"), or what
@@ -70,14 +73,16 @@ BUCK_STATIC_CURVE = StaticCurve.polynomial([32.0, -8.0], domain=(1.0, 4.0),
 
 def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter: str | None = None,
                   decimal: str | None = None, encoding: str | None = None,
-                  skiprows: int = 0, units_row: bool = False) -> dict[str, np.ndarray]:
+                  skiprows: int | None = None, units_row: bool | None = None) -> dict[str, np.ndarray]:
     """Read the columns ``wanted`` (role -> column name) of a CSV file as finite float arrays.
 
     The encoding (:func:`_utf8`), the delimiter and the decimal mark are detected (:func:`_dialect`)
     unless given. The first ``skiprows`` lines are not read, and an Excel ``sep=X`` line where the
     header belongs gives the delimiter (the header is the line after it). With ``units_row`` the line
     after the header holds each column's unit: it is read into ``"_units"`` (role -> unit text,
-    brackets dropped) and is no sample. Raises ``ValueError`` naming the file and the line (the file's
+    brackets dropped) and is no sample. A TOA5 file (:func:`_toa5_options`) sets both, and its line of
+    processing codes after the units is no sample either; ``None`` is the format's default (0 and False
+    for plain CSV). Raises ``ValueError`` naming the file and the line (the file's
     own: line 1 is its first) or column of the first problem.
     """
     p = Path(path)
@@ -104,6 +109,7 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
                                  "encoding='mac_roman' (or the encoding it was saved in), or save the file as UTF-8 "
                                  "CSV") from None
         raw, own = raw.replace(b"\r", b"\n"), False
+    skiprows, units_row, codes_row = _toa5_options(p, raw, start, skiprows, units_row)
     first = skiprows + 1  # the file's line number of the header
     skipped_from = start
     start = _skip_lines(raw, start, skiprows)
@@ -132,15 +138,24 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
     if skiprows:
         _refuse_skipped_header(p, _decode(p, raw, skipped_from, start), head, names, skiprows)
     _refuse_headerless(p, head, names, first)
-    unit_line, cut = None, None
+    unit_line, code_line, cut = None, None, None
+    rows_out = int(units_row) + int(codes_row)  # the lines after the header that hold no sample
     if units_row:  # read, then blanked in place: the lines keep their numbers, and a blank line is no sample
         u0 = _skip_lines(raw, start, 1)
         u1 = _skip_lines(raw, u0, 1)
+        u2 = _skip_lines(raw, u1, int(codes_row))
         if u0 >= len(raw):
-            raise ValueError(f"{p}: line {first + 1}: units_row=True, but there is no line after the header")
+            raise ValueError(f"{p}: line {first + 1}: " + ("the TOA5 file ends after its column names (line 2), "
+                             "before its units (line 3)" if codes_row else "units_row=True, but there is no line "
+                             "after the header"))
+        if codes_row and u1 >= len(raw):
+            raise ValueError(f"{p}: line {first + 2}: the TOA5 file ends after its units (line 3), before its "
+                             "processing codes (line 4)")
         unit_line = _decode(p, raw, u0, u1).rstrip("\r\n")
-        cut = raw[start:u0] + raw[u1:]  # for numpy's reader, which a blank line sends to the careful one
-        raw = raw[:u0] + (b"\r\n" if raw[u0:u1].endswith(b"\r\n") else b"\n") + raw[u1:]
+        code_line = _decode(p, raw, u1, u2).rstrip("\r\n") if codes_row else None
+        cut = raw[start:u0] + raw[u2:]  # for numpy's reader, which a blank line sends to the careful one
+        nl = b"\r\n" if raw[u0:u1].endswith(b"\r\n") else b"\n"
+        raw = raw[:u0] + nl * rows_out + raw[u2:]
         own = False
     if units_row:  # the first lines again, the units row blanked
         end = _skip_lines(raw, start, _SNIFF_LINES)
@@ -168,13 +183,16 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
         if header.count(col) > 1:
             raise ValueError(f"{p}: column {col!r} appears {header.count(col)} times in the header")
         index[role] = header.index(col)
-    units = None if unit_line is None else _units_of_row(p, unit_line, delim, index, first + 1)
+    toa5 = " (a TOA5 file's units)" if codes_row else ""
+    units = None if unit_line is None else _units_of_row(p, unit_line, delim, index, first + 1, toa5)
+    if code_line is not None:
+        _check_codes_row(p, code_line, delim, index, wanted, first + 2)
     text = (lambda: head) if end >= len(raw) else functools.cache(lambda: _decode(p, raw, start, len(raw)))
     if cut is not None:  # the units row taken out: the samples' file lines are one further on
         fast = _fast_columns(p, index, raw=cut, text=functools.cache(lambda: _decode(p, cut, 0, len(cut))),
                              delimiter=delim, decimal=dec, n_fields=len(header), reread=False, first=first)
         if fast is not None:
-            fast["_lines"] = fast["_lines"] + 1
+            fast["_lines"] = fast["_lines"] + rows_out
     elif start == 0 or (start <= 3 and raw.startswith(codecs.BOM_UTF8)):
         fast = _fast_columns(p, index, raw=raw, text=text, delimiter=delim, decimal=dec, n_fields=len(header),
                              reread=own)
@@ -215,8 +233,9 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
     if lines and read - last > 1:
         _refuse_open_quote(p, text(), last, lines[-1], read + first - 1, header, delim)
     if not lines:
-        after = "the header" if units is None else "the header's units row"
-        raise ValueError(f"{p}: line {first + 1 + (units is not None)}: no data rows after {after}; expected one sample "
+        after = ("the header" if units is None else "the header's units row" if not codes_row
+                 else "the TOA5 file's four header lines")
+        raise ValueError(f"{p}: line {first + 1 + rows_out}: no data rows after {after}; expected one sample "
                          "per line")
     out = {role: np.array(v) for role, v in values.items()}
     out["_lines"] = np.array(lines)
@@ -270,14 +289,60 @@ def _numeric(cell: str, decimal: str) -> bool:
         return False
 
 
-def _units_of_row(p: Path, line: str, delim: str, index: dict[str, int], number: int) -> dict[str, str]:
-    """The units a logger's units row gives the columns read (role -> unit, ``[rpm]`` read as ``rpm``)."""
+def _units_of_row(p: Path, line: str, delim: str, index: dict[str, int], number: int, toa5: str = "") -> dict[str, str]:
+    """The units a logger's units row gives the columns read (role -> unit, ``[rpm]`` read as ``rpm``); ``toa5``
+    non-empty: the units row of a TOA5 file, which no option drops."""
     cells = next(csv.reader([line], delimiter=delim), [])
     units = {role: _unbracket(cells[i]) if i < len(cells) else "" for role, i in index.items()}
     if all(_numeric(u, ".") or _numeric(u, ",") for u in units.values() if u) and any(units.values()):
-        raise ValueError(f"{p}: line {number} holds numbers ({line.strip()!r}), a sample, not a row of units: drop "
-                         "units_row=True")
+        raise ValueError(f"{p}: line {number} holds numbers ({line.strip()!r}), a sample, not a row of units"
+                         + (f"{toa5}: the file's header lines were cut or edited; a TOA5 file has its column "
+                            "names on line 2, their units on line 3 and the processing codes on line 4, then its "
+                            "samples: collect or convert the file again" if toa5 else ": drop units_row=True"))
     return units
+
+
+def _check_codes_row(p: Path, line: str, delim: str, index: dict[str, int], wanted: Mapping[str, str],
+                     number: int) -> None:
+    """A ``ValueError`` when a TOA5 file's line of processing codes (``Smp``, ``Avg``, ``Max`` …, blank for
+    TIMESTAMP and RECORD) holds a number in a column read: a sample there, the header lines cut or edited, which
+    would be dropped without a word."""
+    cells = next(csv.reader([line], delimiter=delim), [])
+    for role, i in index.items():
+        if i < len(cells) and _numeric(cells[i], "."):
+            raise ValueError(f"{p}: line {number} holds numbers ({line.strip()!r}; column {wanted[role]!r}: "
+                             f"{cells[i].strip()!r}) where a TOA5 file has its processing codes (Smp, Avg, Max …): "
+                             "the file's header lines were cut or edited; a TOA5 file has its column names on line "
+                             "2, their units on line 3 and the processing codes on line 4, then its samples: "
+                             "collect or convert the file again")
+
+
+#: Line 1 of a TOA5 file: its first field TOA5, quoted (as Campbell Scientific's software writes it) or not.
+_TOA5 = re.compile(rb'[ \t]*("?)TOA5\1[ \t]*(?:,|\r?\n|$)')
+
+
+def _toa5_options(p: Path, raw: bytes, start: int, skiprows: int | None,
+                  units_row: bool | None) -> tuple[int, bool, bool]:
+    """``(skiprows, units_row, codes_row)`` for the file whose UTF-8 text starts at ``raw[start]``.
+
+    A TOA5 file (Campbell Scientific's ASCII format, as LoggerNet and CardConvert write it: line 1's first field
+    ``TOA5``, quoted or not, then the column names, their units and the processing codes, then the samples) is read
+    with ``skiprows=1``, its units row and its processing codes (``codes_row``) not read as samples; a ``skiprows``
+    or ``units_row`` given that contradicts this is a ``ValueError``. Any other file: the options given, else 0 and
+    False.
+    """
+    if not _TOA5.match(raw, start):
+        return (0 if skiprows is None else skiprows), bool(units_row), False
+    fmt = (f"{p}: the file is a TOA5 file (Campbell Scientific's ASCII format, line 1 starts \"TOA5\"), read as "
+           "such without options: its column names are line 2, their units line 3 (the record's units) and the "
+           "processing codes line 4, then the samples")
+    if skiprows not in (None, 1):
+        raise ValueError(f"{fmt}; skiprows={skiprows} says the column names are line {skiprows + 1}: omit skiprows= "
+                         "(or pass skiprows=1)")
+    if units_row is False:
+        raise ValueError(f"{fmt}; units_row=False says line 3 is a sample, but it is the units row: omit units_row= "
+                         "(or pass units_row=True)")
+    return 1, True, True
 
 
 def _unbracket(cell: str) -> str:
@@ -406,6 +471,19 @@ _BINARY_SIGNATURES = tuple((re.compile(magic, re.DOTALL), what, advice) for magi
      + _AS_ARRAYS),
 ))
 
+#: Line 1 of Campbell Scientific's binary TOB1/TOB2/TOB3 files (an ASCII header, then binary frames): its first
+#: field, quoted as their software writes it (group 1 the quote), after a UTF-8 byte-order mark or none.
+_TOB = re.compile(rb'(?:\xef\xbb\xbf)?[ \t]*("?)(TOB[123])\1[ \t]*,')
+
+
+def _is_utf8(raw: bytes) -> bool:
+    try:
+        raw.decode("utf-8")
+    except UnicodeDecodeError:
+        return False
+    return True
+
+
 #: The byte order each UTF-16/32 byte-order mark says (UTF-32's little-endian mark starts with UTF-16's: same order).
 _BOM_ORDERS = ((codecs.BOM_UTF32_BE, "-be"), (codecs.BOM_UTF16_LE, "-le"), (codecs.BOM_UTF16_BE, "-be"))
 _ORDER_NAMES = {"-le": "little-endian", "-be": "big-endian"}
@@ -423,6 +501,14 @@ def _utf8(p: Path, raw: bytes, encoding: str | None) -> tuple[bytes, int, bool]:
     for magic, what, advice in _BINARY_SIGNATURES:
         if magic.match(raw) and (what != _PARQUET or raw.endswith(b"PAR1")):  # a text header may start "PAR1,"
             raise ValueError(f"{p}: the file is {what}, not CSV text; {advice}")
+    tob = _TOB.match(raw)
+    if tob and (tob.group(1) or b"\x00" in raw or not _is_utf8(raw)):  # a column named TOB1 unquoted: text is text
+        kind = tob.group(2).decode()
+        raise ValueError(f"{p}: the file is a Campbell Scientific {kind} file (line 1 starts \"{kind}\"), the binary "
+                         "format a data logger writes to its card or LoggerNet collects, not CSV text; convert it to "
+                         "TOA5, the logger's ASCII format, with CardConvert (LoggerNet's Card Convert, or Campbell "
+                         "Scientific's free CardConvert: output file format TOA5) or collect the table as ASCII "
+                         "table data (TOA5) in LoggerNet, and read that file: graybox reads TOA5 without options")
     if encoding is not None:
         if not isinstance(encoding, str):
             raise TypeError(f"encoding must name a text encoding (a str) such as 'cp1252', got {encoding!r}")
@@ -779,8 +865,8 @@ def load_record_csv(
     delimiter: str | None = None,
     decimal: str | None = None,
     encoding: str | None = None,
-    skiprows: int = 0,
-    units_row: bool = False,
+    skiprows: int | None = None,
+    units_row: bool | None = None,
 ) -> Record:
     """A dynamic record (input, output, sampling period) from a CSV file.
 
@@ -791,7 +877,13 @@ def load_record_csv(
         line 1, or the line after ``skiprows`` lines; a file with lines before them that are not
         skipped (a data logger's header block) is refused, naming the line that holds them and
         the ``skiprows=`` to pass. A first line ``sep=;`` (Excel's delimiter hint) gives the
-        delimiter, and the column names are the line after it.
+        delimiter, and the column names are the line after it. A Campbell Scientific TOA5 file (what
+        LoggerNet and CardConvert write: line 1's first field ``TOA5``, then a line of column names,
+        a line of units, a line of processing codes such as ``Smp``/``Avg``/``Max``, then the
+        samples) is read without options: the names from line 2, the record's units from line 3 (as
+        ``units_row=True`` reads a units row), line 4 no sample, and messages name the file's own
+        lines; its ``TIMESTAMP`` column holds dates, so give ``Ts`` (``time="TIMESTAMP"`` is
+        refused). A binary TOB1/TOB2/TOB3 file is refused: convert it to TOA5 with CardConvert.
     u : str or sequence of str
         Name of the input column, or of several input columns (``["n1", "n2"]``).
     y : str
@@ -837,15 +929,17 @@ def load_record_csv(
         or UTF-32 when the file starts with their byte-order mark (Excel's "Unicode text"); a file
         that is not UTF-8 is an error naming the line and suggesting ``encoding=``; an encoding
         that contradicts the file's byte-order mark is an error.
-    skiprows : int
-        Lines before the column names that are not read (default 0), e.g. a data logger's header
+    skiprows : int, optional
+        Lines before the column names that are not read (default 0; 1 for a TOA5 file, where
+        another value is refused), e.g. a data logger's header
         block of instrument, date and channels. Messages still name the file's own lines (line 1
         is its first line, skipped or not).
-    units_row : bool
+    units_row : bool, optional
         The line after the column names gives each column's unit (``s;rpm;Pa``, brackets allowed),
         as data loggers write: it becomes the record's ``units`` (the inputs must share one unit
         unless ``units=`` says which to show; a ``units=`` that contradicts it is refused; a time
-        column must be in seconds). Without it such a line is refused, naming this option.
+        column must be in seconds). Without it such a line is refused, naming this option. Default
+        False, True for a TOA5 file (where ``False`` is refused).
 
     Returns
     -------
@@ -857,7 +951,9 @@ def load_record_csv(
     ValueError
         Naming the file and the line or column: a missing column (with close names), column names
         below the header line (a header block not skipped, or skipped too far), a ``sep=`` line that
-        disagrees with ``delimiter=``, a negative ``skiprows``, an empty cell, NaN/inf or text in a used column, non-increasing or uneven stamps, Ts disagreeing
+        disagrees with ``delimiter=``, a negative ``skiprows``, a ``skiprows`` or ``units_row`` that
+        contradicts a TOA5 file, a TOA5 file whose header lines were cut (numbers on its units or
+        processing-codes line), a binary TOB1/TOB2/TOB3 file, an empty cell, NaN/inf or text in a used column, non-increasing or uneven stamps, Ts disagreeing
         with the stamps, or neither ``time`` nor ``Ts`` given; an empty file, a header without
         rows, mixed delimiters, a decimal comma with an unquoted comma delimiter, a delimiter or
         decimal mark that the first lines leave ambiguous (pass ``delimiter=`` / ``decimal=``), a
@@ -885,14 +981,14 @@ def load_record_csv(
         raise TypeError(f"time must name the time-stamp column (a str), got {time!r}")
     units = check_units(units, f"{p}")
     check_real(time_rtol, "time_rtol", low=0, high=1, low_open=True, high_open=True)
-    skiprows = check_int(skiprows, "skiprows", low=0)
+    skiprows = None if skiprows is None else check_int(skiprows, "skiprows", low=0)
     ucols, names = _input_columns(p, u, y, input_names)
     wanted = _wanted(ucols, y, time=time)
-    units_row = check_bool(units_row, "units_row")
+    units_row = None if units_row is None else check_bool(units_row, "units_row")
     cols = _read_columns(p, wanted, delimiter=delimiter, decimal=decimal, encoding=encoding, skiprows=skiprows,
                          units_row=units_row)
     lines = cols["_lines"]
-    if units_row:
+    if "_units" in cols:  # units_row=True, or a TOA5 file
         units = _units_from_row(p, units, cols["_units"], [r for r in wanted if r not in ("y", "time")], time)
     if time is not None:
         Ts = _check_time(p, time, cols["time"], lines, Ts, time_rtol)
@@ -1025,9 +1121,9 @@ def load_static_csv(
     decimal: str | None = None,
     uncertainty: float | Sequence[float] | str | None = None,
     encoding: str | None = None,
-    skiprows: int = 0,
+    skiprows: int | None = None,
     units: tuple[str, str] = ("", ""),
-    units_row: bool = False,
+    units_row: bool | None = None,
 ) -> StaticPoints:
     """Measured static points (ū_i, ȳ_i) from a CSV file.
 
@@ -1035,7 +1131,8 @@ def load_static_csv(
     ----------
     path : str or path-like
         The CSV file (header line with column names, one point per line; lines before the header
-        as in :func:`load_record_csv`).
+        as in :func:`load_record_csv`), or a Campbell Scientific TOA5 file, read without options
+        (as in :func:`load_record_csv`).
     u : str or sequence of str
         Name of the column holding the constant input level ū, or of one column per input.
     y : str
@@ -1060,13 +1157,15 @@ def load_static_csv(
     encoding : str, optional
         The text encoding (as in :func:`load_record_csv`; UTF-8, or UTF-16/32 by their byte-order
         mark, by default).
-    skiprows : int
-        Lines before the column names that are not read (as in :func:`load_record_csv`; default 0).
+    skiprows : int, optional
+        Lines before the column names that are not read (as in :func:`load_record_csv`; default 0,
+        1 for a TOA5 file).
     units : (str, str)
         Units of (ū, ȳ), as a :class:`~graybox.Record`'s: shown (plots label their axes with them) and
         checked against the records' and a model's; default none said.
-    units_row : bool
-        The line after the column names gives each column's unit (as in :func:`load_record_csv`); an
+    units_row : bool, optional
+        The line after the column names gives each column's unit (as in :func:`load_record_csv`;
+        default False, True for a TOA5 file); an
         ``uncertainty`` column's unit, if given, must be the output's (``ValueError`` otherwise, and when the
         output has none).
 
@@ -1090,15 +1189,15 @@ def load_static_csv(
     if name is not None:
         check_str(name, "name")
     check_choice(repeats, "repeats", ("error", "mean"))
-    skiprows = check_int(skiprows, "skiprows", low=0)
+    skiprows = None if skiprows is None else check_int(skiprows, "skiprows", low=0)
     units = check_units(units, f"{p}")
     ucols, names = _input_columns(p, u, y, input_names)
     label = name or p.stem
     wanted = _wanted(ucols, y, uncertainty=uncertainty if isinstance(uncertainty, str) else None)
-    units_row = check_bool(units_row, "units_row")
+    units_row = None if units_row is None else check_bool(units_row, "units_row")
     cols = _read_columns(p, wanted, delimiter=delimiter, decimal=decimal, encoding=encoding, skiprows=skiprows,
                          units_row=units_row)
-    if units_row:
+    if "_units" in cols:  # units_row=True, or a TOA5 file
         units = _units_from_row(p, units, cols["_units"], [r for r in wanted if r not in ("y", "uncertainty")], None)
         said = cols["_units"].get("uncertainty", "")
         if said and units[1] and said != units[1]:  # δ is read in the output's units: another would scale it

@@ -1,0 +1,108 @@
+"""A newcomer's own logger files: Campbell Scientific's TOA5 (LoggerNet, CardConvert) read without options, its
+binary TOB1/2/3 refused as what they are, and the other loggers' ASCII exports a lab hands round."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import graybox as gb
+
+#: The four header lines of a TOA5 file as a CR1000 writes them: every text field quoted.
+TOA5_HEAD = ('"TOA5","CR1000","CR1000","1234","CR1000.Std.32","CPU:x.CR1","1","Table1"\n'
+             '"TIMESTAMP","RECORD","Power","Temp"\n'
+             '"TS","RN","W","degC"\n'
+             '"","","Smp","Avg"\n')
+TOA5_ROWS = ('"2026-01-01 00:00:00",0,10.0,20.1\n'
+             '"2026-01-01 00:00:01",1,10.0,20.2\n'
+             '"2026-01-01 00:00:02",2,12.0,20.4\n'
+             '"2026-01-01 00:00:03",3,12.0,20.7\n')
+
+
+def _write(path, text: str, newline: str = "\r\n"):
+    path.write_bytes(text.replace("\n", newline).encode("utf-8"))
+    return path
+
+
+@pytest.mark.parametrize("newline", ["\r\n", "\n"])
+def test_a_toa5_file_is_read_without_options(tmp_path, newline):
+    f = _write(tmp_path / "CR1000_Table1.dat", TOA5_HEAD + TOA5_ROWS, newline)
+    r = gb.load_record_csv(f, u="Power", y="Temp", Ts=1.0)
+    np.testing.assert_array_equal(r.u, [10.0, 10.0, 12.0, 12.0])
+    np.testing.assert_array_equal(r.y, [20.1, 20.2, 20.4, 20.7])
+    assert r.units == ("W", "degC") and r.Ts == 1.0
+    # the explicit options that say what the format says are accepted, with the same record
+    same = gb.load_record_csv(f, u="Power", y="Temp", Ts=1.0, skiprows=1, units_row=True)
+    np.testing.assert_array_equal(same.y, r.y)
+    assert same.units == r.units
+    # static points too, and a units= that agrees with the units row
+    pts = gb.load_static_csv(f, u="RECORD", y="Temp", units=("", "degC"))
+    np.testing.assert_array_equal(pts.ybar, r.y)
+    assert pts.units == ("RN", "degC")
+
+
+def test_a_toa5_file_unquoted_or_with_a_byte_order_mark_is_recognised(tmp_path):
+    text = (TOA5_HEAD + TOA5_ROWS).replace('"', "")
+    f = tmp_path / "bare.dat"
+    f.write_bytes(b"\xef\xbb\xbf" + text.encode())
+    r = gb.load_record_csv(f, u="Power", y="Temp", Ts=1.0)
+    assert r.units == ("W", "degC") and len(r) == 4
+
+
+def test_a_toa5_files_messages_name_its_own_lines(tmp_path):
+    bad = TOA5_ROWS.replace("20.4", "abc")
+    f = _write(tmp_path / "t.dat", TOA5_HEAD + bad)
+    with pytest.raises(ValueError, match=r"line 7, column 'Temp': 'abc' is not a number"):
+        gb.load_record_csv(f, u="Power", y="Temp", Ts=1.0)
+    nan = _write(tmp_path / "nan.dat", TOA5_HEAD + TOA5_ROWS.replace("20.2", '"NAN"'))
+    with pytest.raises(ValueError, match=r"line 6, column 'Temp': 'NAN' is not a finite number"):
+        gb.load_record_csv(nan, u="Power", y="Temp", Ts=1.0)
+    empty = _write(tmp_path / "empty.dat", TOA5_HEAD)
+    with pytest.raises(ValueError, match=r"line 5: no data rows"):
+        gb.load_record_csv(empty, u="Power", y="Temp", Ts=1.0)
+    with pytest.raises(ValueError, match=r"no column 'Pow' .*Did you mean 'Power'"):
+        gb.load_record_csv(f, u="Pow", y="Temp", Ts=1.0)
+
+
+def test_a_toa5_timestamp_is_a_date_refused_naming_ts(tmp_path):
+    f = _write(tmp_path / "t.dat", TOA5_HEAD + TOA5_ROWS)
+    with pytest.raises(ValueError, match=r"line 5, column 'TIMESTAMP': '2026-01-01 00:00:00' is not a number.*Ts="):
+        gb.load_record_csv(f, u="Power", y="Temp", time="TIMESTAMP")
+
+
+def test_options_that_contradict_the_toa5_format_are_refused(tmp_path):
+    f = _write(tmp_path / "t.dat", TOA5_HEAD + TOA5_ROWS)
+    for kw, said in ((dict(skiprows=0), "skiprows=0"), (dict(skiprows=2), "skiprows=2"),
+                     (dict(units_row=False), "units_row=False")):
+        with pytest.raises(ValueError, match=rf"TOA5.*{said}.*omit"):
+            gb.load_record_csv(f, u="Power", y="Temp", Ts=1.0, **kw)
+        with pytest.raises(ValueError, match=rf"TOA5.*{said}.*omit"):
+            gb.load_static_csv(f, u="Power", y="Temp", **kw)
+
+
+def test_a_damaged_toa5_header_is_refused_with_its_line(tmp_path):
+    no_codes = _write(tmp_path / "a.dat", TOA5_HEAD.replace('"","","Smp","Avg"\n', "") + TOA5_ROWS)
+    with pytest.raises(ValueError, match=r"line 4 holds numbers .*processing codes"):
+        gb.load_record_csv(no_codes, u="Power", y="Temp", Ts=1.0)
+    no_units = _write(tmp_path / "b.dat", TOA5_HEAD.replace('"TS","RN","W","degC"\n', "")
+                      .replace('"","","Smp","Avg"\n', "") + TOA5_ROWS)
+    with pytest.raises(ValueError, match=r"line 3 holds numbers .*TOA5"):
+        gb.load_record_csv(no_units, u="Power", y="Temp", Ts=1.0)
+    short = _write(tmp_path / "c.dat", TOA5_HEAD.split("\n")[0] + "\n" + TOA5_HEAD.split("\n")[1] + "\n")
+    with pytest.raises(ValueError, match=r"line 3.*TOA5"):
+        gb.load_record_csv(short, u="Power", y="Temp", Ts=1.0)
+
+
+@pytest.mark.parametrize("kind", ["TOB1", "TOB2", "TOB3"])
+def test_a_binary_campbell_file_is_refused_as_what_it_is(tmp_path, kind):
+    f = tmp_path / "CR1000_Table1.dat"
+    f.write_bytes(f'"{kind}","CR1000","CR1000","1234","CR1000.Std.32","CPU:x.CR1","1","Table1"\r\n'.encode()
+                  + b'"TIMESTAMP","RECORD","Power"\r\n"TS","RN","W"\r\n"","","Smp"\r\n"ULONG","ULONG","IEEE4"\r\n'
+                  + bytes([0, 0, 0x12, 0x9f, 0xff, 0x80, 0x3f, 0x00]) * 8)
+    with pytest.raises(ValueError, match=rf"{kind}.*binary.*CardConvert.*TOA5"):
+        gb.load_record_csv(f, u="Power", y="RECORD", Ts=1.0)
+    with pytest.raises(ValueError, match=rf"{kind}.*binary.*CardConvert.*TOA5"):
+        gb.load_static_csv(f, u="Power", y="RECORD", encoding="cp1252")
+    # a text file whose first column is named TOB1 (a boiler's temperature) is no logger file
+    ok = _write(tmp_path / "boiler.csv", f"{kind},power\n20.5,1\n21.0,2\n")
+    assert gb.load_static_csv(ok, u="power", y=kind).ybar.tolist() == [20.5, 21.0]
