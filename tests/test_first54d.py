@@ -88,9 +88,12 @@ def test_a_damaged_toa5_header_is_refused_with_its_line(tmp_path):
                       .replace('"","","Smp","Avg"\n', "") + TOA5_ROWS)
     with pytest.raises(ValueError, match=r"line 3 holds numbers .*TOA5"):
         gb.load_record_csv(no_units, u="Power", y="Temp", Ts=1.0)
-    short = _write(tmp_path / "c.dat", TOA5_HEAD.split("\n")[0] + "\n" + TOA5_HEAD.split("\n")[1] + "\n")
-    with pytest.raises(ValueError, match=r"line 3.*TOA5"):
-        gb.load_record_csv(short, u="Power", y="Temp", Ts=1.0)
+    lines = TOA5_HEAD.splitlines(keepends=True)
+    for n, said in ((1, r"line 2: the TOA5 file ends after line 1"), (2, r"line 3: the TOA5 file ends after its column"),
+                    (3, r"line 4: the TOA5 file ends after its units")):
+        short = _write(tmp_path / "c.dat", "".join(lines[:n]))
+        with pytest.raises(ValueError, match=said):
+            gb.load_record_csv(short, u="Power", y="Temp", Ts=1.0)
 
 
 @pytest.mark.parametrize("kind", ["TOB1", "TOB2", "TOB3"])

@@ -113,6 +113,8 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
     first = skiprows + 1  # the file's line number of the header
     skipped_from = start
     start = _skip_lines(raw, start, skiprows)
+    if start >= len(raw) and codes_row:
+        raise ValueError(f"{p}: line 2: the TOA5 file ends after line 1, before its column names (line 2)")
     if start >= len(raw) and skiprows:
         raise ValueError(f"{p}: line {first}: the file is empty after the {skiprows} line(s) skipped (skiprows="
                          f"{skiprows}); expected a header line naming the columns, then one sample per line")
