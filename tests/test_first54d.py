@@ -109,3 +109,17 @@ def test_a_binary_campbell_file_is_refused_as_what_it_is(tmp_path, kind):
     # a text file whose first column is named TOB1 (a boiler's temperature) is no logger file
     ok = _write(tmp_path / "boiler.csv", f"{kind},power\n20.5,1\n21.0,2\n")
     assert gb.load_static_csv(ok, u="power", y=kind).ybar.tolist() == [20.5, 21.0]
+
+
+def test_a_labview_tdms_file_is_refused_as_what_it_is(tmp_path):
+    # NI's binary TDMS (LabVIEW's logging format): lead-in "TDSm", table-of-contents mask, version 4713, offsets
+    import struct
+
+    f = tmp_path / "run.tdms"
+    f.write_bytes(b"TDSm" + struct.pack("<iIqq", 0x0E, 4713, 1000, 500) + b"\x00" * 40 + b"/'Group'/'Power'")
+    with pytest.raises(ValueError, match=r"TDMS.*not CSV text.*nptdms"):
+        gb.load_record_csv(f, u="Power", y="Temp", Ts=1.0)
+    index = tmp_path / "run.tdms_index"
+    index.write_bytes(b"TDSh" + struct.pack("<iIqq", 0x0E, 4712, 1000, 500))
+    with pytest.raises(ValueError, match=r"TDMS.*not CSV text"):
+        gb.load_static_csv(index, u="Power", y="Temp")

@@ -468,6 +468,9 @@ _BINARY_SIGNATURES = tuple((re.compile(magic, re.DOTALL), what, advice) for magi
     (re.escape(b"\x89HDF\r\n\x1a\n"), "an HDF5 file (or a MATLAB v7.3 .mat file)",
      "read it with h5py or pandas.read_hdf " + _AS_ARRAYS),
     (re.escape(b"MATLAB 5.0 MAT-file"), "a MATLAB .mat file", "read it with scipy.io.loadmat " + _AS_ARRAYS),
+    (rb"TDS[mh].{4}[\x68\x69]\x12\x00\x00", "a National Instruments TDMS file (LabVIEW's binary measurement format)",
+     "read it with the nptdms package (nptdms.TdmsFile.read(path), a channel's data by [group][channel][:]) "
+     + _AS_ARRAYS + ", or export it from LabVIEW or DIAdem as CSV text"),
     (re.escape(b"SQLite format 3\x00"), "an SQLite database (a grid's store?)",
      "read a grid's store with graybox.load_results; for your own tables, read them with pandas.read_sql "
      + _AS_ARRAYS),
@@ -961,7 +964,7 @@ def load_record_csv(
         decimal mark that the first lines leave ambiguous (pass ``delimiter=`` / ``decimal=``), a
         thousands separator, text that is not in the encoding (UTF-8 by default), an unknown
         ``encoding`` (or one that contradicts the file's byte-order mark), or a binary file (an
-        Excel workbook, a compressed CSV, NumPy or Parquet), named as what it is.
+        Excel workbook, a compressed CSV, NumPy, Parquet or LabVIEW TDMS), named as what it is.
     TypeError
         ``path``, ``u``, ``y``, ``time``, ``name``, ``Ts``, ``delimiter``, ``decimal``, ``encoding``, ``skiprows`` or ``units`` of the wrong
         type (a column is named by a str; units are a pair of str).
