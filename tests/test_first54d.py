@@ -123,3 +123,20 @@ def test_a_labview_tdms_file_is_refused_as_what_it_is(tmp_path):
     index.write_bytes(b"TDSh" + struct.pack("<iIqq", 0x0E, 4712, 1000, 500))
     with pytest.raises(ValueError, match=r"TDMS.*not CSV text"):
         gb.load_static_csv(index, u="Power", y="Temp")
+
+
+def test_a_gap_in_a_toa5_files_record_numbers_is_refused_with_its_lines(tmp_path):
+    # the logger stopped (power lost, program reloaded) or a collection was appended twice: with Ts= the samples
+    # on both sides of the gap were glued into one record without a word
+    gap = TOA5_ROWS.replace('"2026-01-01 00:00:02",2,', '"2026-01-01 00:00:09",9,').replace(
+        '"2026-01-01 00:00:03",3,', '"2026-01-01 00:00:10",10,')
+    f = _write(tmp_path / "gap.dat", TOA5_HEAD + gap)
+    with pytest.raises(ValueError, match=r"column 'RECORD'.*from 1 \(line 6\) to 9 \(line 7\).*7 sample"):
+        gb.load_record_csv(f, u="Power", y="Temp", Ts=1.0)
+    twice = _write(tmp_path / "twice.dat", TOA5_HEAD + TOA5_ROWS + TOA5_ROWS.splitlines(keepends=True)[-1])
+    with pytest.raises(ValueError, match=r"column 'RECORD'.*from 3 \(line 8\) to 3 \(line 9\)"):
+        gb.load_record_csv(twice, u="Power", y="Temp", Ts=1.0)
+    # static points need no contiguous samples
+    assert len(gb.load_static_csv(f, u="Power", y="Temp", repeats="mean")) == 2
+    with pytest.raises(ValueError, match=r"column 'RECORD'.*from 1 \(line 6\) to 9 \(line 7\)"):
+        gb.load_record_csv(f, u="RECORD", y="Temp", Ts=1.0)

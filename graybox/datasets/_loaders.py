@@ -189,6 +189,8 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
     units = None if unit_line is None else _units_of_row(p, unit_line, delim, index, first + 1, toa5)
     if code_line is not None:
         _check_codes_row(p, code_line, delim, index, wanted, first + 2)
+        if header.count("RECORD") == 1:  # a TOA5 file's record numbers, read to find a gap (load_record_csv)
+            wanted, index = {**wanted, "_record": "RECORD"}, {**index, "_record": header.index("RECORD")}
     text = (lambda: head) if end >= len(raw) else functools.cache(lambda: _decode(p, raw, start, len(raw)))
     if cut is not None:  # the units row taken out: the samples' file lines are one further on
         fast = _fast_columns(p, index, raw=cut, text=functools.cache(lambda: _decode(p, cut, 0, len(cut))),
@@ -888,7 +890,9 @@ def load_record_csv(
         samples) is read without options: the names from line 2, the record's units from line 3 (as
         ``units_row=True`` reads a units row), line 4 no sample, and messages name the file's own
         lines; its ``TIMESTAMP`` column holds dates, so give ``Ts`` (``time="TIMESTAMP"`` is
-        refused). A binary TOB1/TOB2/TOB3 file is refused: convert it to TOA5 with CardConvert.
+        refused), and its ``RECORD`` numbers must step by one (a gap, samples lost or repeated, is
+        refused naming its lines). A binary TOB1/TOB2/TOB3 file is refused: convert it to TOA5 with
+        CardConvert.
     u : str or sequence of str
         Name of the input column, or of several input columns (``["n1", "n2"]``).
     y : str
@@ -958,7 +962,7 @@ def load_record_csv(
         below the header line (a header block not skipped, or skipped too far), a ``sep=`` line that
         disagrees with ``delimiter=``, a negative ``skiprows``, a ``skiprows`` or ``units_row`` that
         contradicts a TOA5 file, a TOA5 file whose header lines were cut (numbers on its units or
-        processing-codes line), a binary TOB1/TOB2/TOB3 file, an empty cell, NaN/inf or text in a used column, non-increasing or uneven stamps, Ts disagreeing
+        processing-codes line) or a gap in its ``RECORD`` numbers, a binary TOB1/TOB2/TOB3 file, an empty cell, NaN/inf or text in a used column, non-increasing or uneven stamps, Ts disagreeing
         with the stamps, or neither ``time`` nor ``Ts`` given; an empty file, a header without
         rows, mixed delimiters, a decimal comma with an unquoted comma delimiter, a delimiter or
         decimal mark that the first lines leave ambiguous (pass ``delimiter=`` / ``decimal=``), a
@@ -995,6 +999,8 @@ def load_record_csv(
     lines = cols["_lines"]
     if "_units" in cols:  # units_row=True, or a TOA5 file
         units = _units_from_row(p, units, cols["_units"], [r for r in wanted if r not in ("y", "time")], time)
+    if "_record" in cols:
+        _check_record_numbers(p, cols["_record"], lines)
     if time is not None:
         Ts = _check_time(p, time, cols["time"], lines, Ts, time_rtol)
     return Record(_inputs(cols, ucols), cols["y"], Ts=float(Ts), name=name or p.stem, units=units, input_names=names)
@@ -1108,6 +1114,27 @@ def _check_time(p: Path, col: str, t: np.ndarray, lines: np.ndarray, Ts: float |
     with np.errstate(divide="ignore"):  # stamps near 1e-300 s: no digit unknown
         digits = int(np.clip(np.floor(-np.log10(res / (t.size - 1) / step)), 1, 12))
     return float(f"{step:.{digits}g}")
+
+
+def _check_record_numbers(p: Path, rec: np.ndarray, lines: np.ndarray) -> None:
+    """A ``ValueError`` when a TOA5 file's ``RECORD`` numbers do not step by one from sample to sample: samples lost
+    (the logger stopped, its table was reset) or repeated (a collection appended twice), so the lines either side
+    are no one record at one sampling period."""
+    step = np.diff(rec)
+    bad = np.flatnonzero(step != 1)
+    if not bad.size:
+        return
+    i = int(bad[0])
+    a, b = rec[i], rec[i + 1]
+    where = f"from {a:g} (line {lines[i]}) to {b:g} (line {lines[i + 1]})"
+    if b > a:
+        raise ValueError(f"{p}: column 'RECORD', the TOA5 file's record numbers, jumps {where}: {b - a - 1:g} "
+                         "sample(s) missing (the logger stopped, or lost them), so the samples either side are no "
+                         "one record at one sampling period; cut the file into two records at the gap (several "
+                         "records of one plant go to the estimators as a list)")
+    raise ValueError(f"{p}: column 'RECORD', the TOA5 file's record numbers, goes back {where}: samples held twice "
+                     "(a collection appended again?) or the logger's table reset; delete the repeated lines, or cut "
+                     "the file into two records there (several records of one plant go to the estimators as a list)")
 
 
 #: Lines at one input level from which a static file is taken for a dynamic record given to load_static_csv.
