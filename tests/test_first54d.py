@@ -140,3 +140,22 @@ def test_a_gap_in_a_toa5_files_record_numbers_is_refused_with_its_lines(tmp_path
     assert len(gb.load_static_csv(f, u="Power", y="Temp", repeats="mean")) == 2
     with pytest.raises(ValueError, match=r"column 'RECORD'.*from 1 \(line 6\) to 9 \(line 7\)"):
         gb.load_record_csv(f, u="RECORD", y="Temp", Ts=1.0)
+
+
+def test_a_units_row_after_a_blank_line_is_read_as_the_refusal_advises(tmp_path):
+    # without units_row the loader names line 3 as units and advises units_row=True, which then read the blank
+    # line 2 as the units row and failed on line 3: "'rpm' is not a number"
+    f = _write(tmp_path / "run.csv", "t,u,y\n\ns,rpm,Pa\n0,1,2\n1,2,3\n2,2,4\n")
+    with pytest.raises(ValueError, match=r"line 3 holds text in every column read .*pass units_row=True"):
+        gb.load_record_csv(f, "u", "y", time="t")
+    r = gb.load_record_csv(f, "u", "y", time="t", units_row=True)
+    assert r.units == ("rpm", "Pa") and r.u.tolist() == [1, 2, 2] and r.Ts == 1.0
+    bad = _write(tmp_path / "bad.csv", "t,u,y\n\ns,rpm,Pa\n0,1,2\n1,x,3\n")
+    with pytest.raises(ValueError, match=r"line 5, column 'u': 'x' is not a number"):
+        gb.load_record_csv(bad, "u", "y", time="t", units_row=True)
+    numbers = _write(tmp_path / "numbers.csv", "t,u,y\n\n0,1,2\n1,2,3\n")
+    with pytest.raises(ValueError, match=r"line 3 holds numbers .*drop units_row=True"):
+        gb.load_record_csv(numbers, "u", "y", time="t", units_row=True)
+    only = _write(tmp_path / "only.csv", "t,u,y\n\ns,rpm,Pa\n\n")
+    with pytest.raises(ValueError, match=r"line 4: no data rows"):
+        gb.load_static_csv(only, "u", "y", units_row=True)

@@ -79,7 +79,7 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
     The encoding (:func:`_utf8`), the delimiter and the decimal mark are detected (:func:`_dialect`)
     unless given. The first ``skiprows`` lines are not read, and an Excel ``sep=X`` line where the
     header belongs gives the delimiter (the header is the line after it). With ``units_row`` the line
-    after the header holds each column's unit: it is read into ``"_units"`` (role -> unit text,
+    after the header (blank lines passed over) holds each column's unit: it is read into ``"_units"`` (role -> unit text,
     brackets dropped) and is no sample. A TOA5 file (:func:`_toa5_options`) sets both, and its line of
     processing codes after the units is no sample either; ``None`` is the format's default (0 and False
     for plain CSV). Raises ``ValueError`` naming the file and the line (the file's
@@ -142,8 +142,13 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
     _refuse_headerless(p, head, names, first)
     unit_line, code_line, cut = None, None, None
     rows_out = int(units_row) + int(codes_row)  # the lines after the header that hold no sample
+    blanks = 0  # blank lines between the header and its units row
     if units_row:  # read, then blanked in place: the lines keep their numbers, and a blank line is no sample
         u0 = _skip_lines(raw, start, 1)
+        while not codes_row and u0 < len(raw) and not raw[u0:_skip_lines(raw, u0, 1)].strip():
+            # a blank line is no sample, nor a row of units: the units row is the first line after the header that
+            # holds anything (the refusal without units_row=True names that line as units)
+            u0, blanks = _skip_lines(raw, u0, 1), blanks + 1
         u1 = _skip_lines(raw, u0, 1)
         u2 = _skip_lines(raw, u1, int(codes_row))
         if u0 >= len(raw):
@@ -186,7 +191,7 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
             raise ValueError(f"{p}: column {col!r} appears {header.count(col)} times in the header")
         index[role] = header.index(col)
     toa5 = " (a TOA5 file's units)" if codes_row else ""
-    units = None if unit_line is None else _units_of_row(p, unit_line, delim, index, first + 1, toa5)
+    units = None if unit_line is None else _units_of_row(p, unit_line, delim, index, first + 1 + blanks, toa5)
     if code_line is not None:
         _check_codes_row(p, code_line, delim, index, wanted, first + 2)
         if header.count("RECORD") == 1:  # a TOA5 file's record numbers, read to find a gap (load_record_csv)
@@ -239,7 +244,7 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
     if not lines:
         after = ("the header" if units is None else "the header's units row" if not codes_row
                  else "the TOA5 file's four header lines")
-        raise ValueError(f"{p}: line {first + 1 + rows_out}: no data rows after {after}; expected one sample "
+        raise ValueError(f"{p}: line {first + 1 + blanks + rows_out}: no data rows after {after}; expected one sample "
                          "per line")
     out = {role: np.array(v) for role, v in values.items()}
     out["_lines"] = np.array(lines)
@@ -944,7 +949,8 @@ def load_record_csv(
         block of instrument, date and channels. Messages still name the file's own lines (line 1
         is its first line, skipped or not).
     units_row : bool, optional
-        The line after the column names gives each column's unit (``s;rpm;Pa``, brackets allowed),
+        The line after the column names (blank lines passed over) gives each column's unit
+        (``s;rpm;Pa``, brackets allowed),
         as data loggers write: it becomes the record's ``units`` (the inputs must share one unit
         unless ``units=`` says which to show; a ``units=`` that contradicts it is refused; a time
         column must be in seconds). Without it such a line is refused, naming this option. Default
