@@ -159,3 +159,14 @@ def test_a_units_row_after_a_blank_line_is_read_as_the_refusal_advises(tmp_path)
     only = _write(tmp_path / "only.csv", "t,u,y\n\ns,rpm,Pa\n\n")
     with pytest.raises(ValueError, match=r"line 4: no data rows"):
         gb.load_static_csv(only, "u", "y", units_row=True)
+
+
+def test_a_toa5_file_resaved_by_a_european_excel_is_still_a_toa5_file(tmp_path):
+    # opened in Excel and saved as "CSV" in a decimal-comma locale: ';' between the fields, quotes dropped; it was
+    # refused as before TOA5 was read ("line 4, column 'Power': 'Smp' is not a number", no option to skip line 4)
+    text = (TOA5_HEAD + TOA5_ROWS).replace('"', "").replace(",", ";").replace(".", ",")
+    f = _write(tmp_path / "resaved.csv", text)
+    r = gb.load_record_csv(f, u="Power", y="Temp", Ts=1.0)
+    assert r.units == ("W", "degC") and r.y.tolist() == [20.1, 20.2, 20.4, 20.7]
+    tabs = _write(tmp_path / "tabs.txt", (TOA5_HEAD + TOA5_ROWS).replace(",", "\t"))
+    assert gb.load_record_csv(tabs, u="Power", y="Temp", Ts=1.0).u.tolist() == [10, 10, 12, 12]

@@ -326,8 +326,9 @@ def _check_codes_row(p: Path, line: str, delim: str, index: dict[str, int], want
                              "collect or convert the file again")
 
 
-#: Line 1 of a TOA5 file: its first field TOA5, quoted (as Campbell Scientific's software writes it) or not.
-_TOA5 = re.compile(rb'[ \t]*("?)TOA5\1[ \t]*(?:,|\r?\n|$)')
+#: Line 1 of a TOA5 file: its first field TOA5, quoted (as Campbell Scientific's software writes it) or not, then a
+#: comma, or the ';' or tab of a copy a spreadsheet saved again (Excel in a decimal-comma locale).
+_TOA5 = re.compile(rb' *("?)TOA5\1 *(?:[,;\t]|\r?\n|$)')
 
 
 def _toa5_options(p: Path, raw: bytes, start: int, skiprows: int | None,
