@@ -170,3 +170,12 @@ def test_a_toa5_file_resaved_by_a_european_excel_is_still_a_toa5_file(tmp_path):
     assert r.units == ("W", "degC") and r.y.tolist() == [20.1, 20.2, 20.4, 20.7]
     tabs = _write(tmp_path / "tabs.txt", (TOA5_HEAD + TOA5_ROWS).replace(",", "\t"))
     assert gb.load_record_csv(tabs, u="Power", y="Temp", Ts=1.0).u.tolist() == [10, 10, 12, 12]
+
+
+def test_two_toa5_files_joined_into_one_are_refused_where_the_second_starts(tmp_path):
+    f = _write(tmp_path / "joined.dat", TOA5_HEAD + TOA5_ROWS + TOA5_HEAD + TOA5_ROWS)
+    with pytest.raises(ValueError, match=r"line 9 starts a TOA5 file's header again .*two files joined"):
+        gb.load_record_csv(f, u="Power", y="Temp", Ts=1.0)
+    bare = _write(tmp_path / "bare.dat", (TOA5_HEAD + TOA5_ROWS + TOA5_HEAD + TOA5_ROWS).replace('"', ""))
+    with pytest.raises(ValueError, match=r"line 9 starts a TOA5 file's header again"):
+        gb.load_static_csv(bare, u="Power", y="Temp", repeats="mean")

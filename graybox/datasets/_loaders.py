@@ -221,6 +221,11 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
         line, read = read + first, reader.line_num  # the line the sample starts on, where its first cells are
         if not row or all(not c.strip() for c in row):
             continue  # blank line (e.g. a trailing newline): not a sample
+        if codes_row and row[0].strip() == "TOA5":  # read as a sample it was "8 fields but the header names 4"
+            raise ValueError(f"{p}: line {line} starts a TOA5 file's header again (\"TOA5\", then the column names, "
+                             "units and processing codes): two files joined into one? Cut the file there into two "
+                             "files, each read as a record (several records of one plant go to the estimators as a "
+                             "list)")
         if read - (line - first) > 1:  # a quoted cell spans lines: it may hold samples a quote left open took in
             _refuse_swallowed(p, text(), row, line - first, line, read + first - 1, header, index, delim, dec)
         if len(row) < need:
