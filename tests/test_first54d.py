@@ -179,3 +179,26 @@ def test_two_toa5_files_joined_into_one_are_refused_where_the_second_starts(tmp_
     bare = _write(tmp_path / "bare.dat", (TOA5_HEAD + TOA5_ROWS + TOA5_HEAD + TOA5_ROWS).replace('"', ""))
     with pytest.raises(ValueError, match=r"line 9 starts a TOA5 file's header again"):
         gb.load_static_csv(bare, u="Power", y="Temp", repeats="mean")
+
+
+def test_column_names_commented_out_below_a_header_block_are_named_not_blamed_on_the_delimiter(tmp_path):
+    # np.savetxt(path, data, delimiter=",", header="logger v1\nrate: 10 Hz\nt,u,y") writes every header line behind
+    # '# ', as many loggers' ASCII exports do: the refusal said "the header was read as one column, split at ',':
+    # pass delimiter=", which no delimiter cures
+    import io
+
+    buf = io.StringIO()
+    np.savetxt(buf, np.array([[0.0, 1, 2], [0.1, 2, 3], [0.2, 3, 4]]), delimiter=",", header="logger v1\nrate: 10 Hz\nt,u,y")
+    f = _write(tmp_path / "log.csv", buf.getvalue(), "\n")
+    with pytest.raises(ValueError, match=r"line 3 names the columns behind the comment marker '#' .*skiprows=2") as e:
+        gb.load_record_csv(f, "u", "y", time="t")
+    assert "pass delimiter=" not in str(e.value)
+    # the advice followed: the '# ' deleted, skiprows=2
+    f.write_text(buf.getvalue().replace("# t,u,y", "t,u,y"))
+    assert gb.load_record_csv(f, "u", "y", time="t", skiprows=2).y.tolist() == [2, 3, 4]
+    spaces = io.StringIO()
+    np.savetxt(spaces, np.array([[0.0, 1, 2], [0.1, 2, 3]]), header="logger v1\nt u y")
+    g = _write(tmp_path / "log.txt", spaces.getvalue(), "\n")
+    with pytest.raises(ValueError, match=r"line 2 names the columns behind the comment marker '#' .*skiprows=1.*"
+                                         r"delimiter=' '"):
+        gb.load_static_csv(g, "u", "y")

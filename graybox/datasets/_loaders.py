@@ -416,6 +416,15 @@ def _refuse_header_block(p: Path, head: str, names: Sequence[str], first: int = 
             raise ValueError(f"{p}: line {i} names the columns ({line!r}), but the header was read from line {first}: "
                              f"the file has {i - 1} line(s) before the column names (a data logger's header "
                              f"block?); pass skiprows={i - 1}")
+    for i, line in enumerate(lines[1:], start=first + 1):
+        # every header line behind '# ', the names' too: np.savetxt's header of several lines, a logger's comments
+        bare = re.sub(r"^\s*#+\s*", "", line) if line.lstrip().startswith("#") else None
+        if bare is not None and (_names_columns(bare, names) or set(names) <= set(bare.split())):
+            spaces = "" if _names_columns(bare, names) else " and delimiter=' ' (its columns are split at spaces)"
+            raise ValueError(f"{p}: line {i} names the columns behind the comment marker '#' ({line!r}), as "
+                             "np.savetxt writes a header (comments='# '), and the header was read from line "
+                             f"{first}: delete the '#' before the names on line {i} (or write the file with "
+                             f"np.savetxt(..., comments='')) and pass skiprows={i - 1}{spaces}")
 
 
 def _refuse_headerless(p: Path, head: str, names: Sequence[str], first: int) -> None:
