@@ -202,3 +202,14 @@ def test_column_names_commented_out_below_a_header_block_are_named_not_blamed_on
     with pytest.raises(ValueError, match=r"line 2 names the columns behind the comment marker '#' .*skiprows=1.*"
                                          r"delimiter=' '"):
         gb.load_static_csv(g, "u", "y")
+
+
+def test_a_header_block_longer_than_the_sniffed_lines_is_found(tmp_path):
+    # a logger's block of one line per channel (HBM catman, Yokogawa, Dewesoft exports run past 50 lines): the
+    # names below line 50 went unseen, and the refusal blamed the delimiter ("pass delimiter=")
+    block = "".join(f"Channel {i}: gain 1\n" for i in range(60))
+    f = _write(tmp_path / "long.csv", block + "t;u;y\n0;1;2\n1;2;3\n2;3;4\n", "\n")
+    with pytest.raises(ValueError, match=r"line 61 names the columns .*pass skiprows=60") as e:
+        gb.load_record_csv(f, "u", "y", time="t")
+    assert "delimiter=" not in str(e.value)
+    assert gb.load_record_csv(f, "u", "y", time="t", skiprows=60).y.tolist() == [2, 3, 4]

@@ -136,7 +136,11 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
     if saved:  # what graybox.save wrote (a Record, a Dataset …): its first line "{" read as one column named "{"
         raise ValueError(f"{p}: the file is a graybox JSON file (a {saved.group(1)}, written by graybox.save), not CSV "
                          "text; read it with graybox.load(path)")
-    _refuse_header_block(p, head, names, first)
+    block = head
+    if end < len(raw) and not _names_columns(head.split("\n", 1)[0], names):
+        # the header line does not name them: a logger's block (one line per channel) may run past the lines sniffed
+        block = raw[start:_skip_lines(raw, start, _BLOCK_LINES)].decode("utf-8", errors="replace")
+    _refuse_header_block(p, block, names, first)
     if skiprows:
         _refuse_skipped_header(p, _decode(p, raw, skipped_from, start), head, names, skiprows)
     _refuse_headerless(p, head, names, first)
@@ -603,6 +607,8 @@ def _utf16_order(head: bytes) -> str | None:
 #: Delimiters tried when none is given, and how many lines the detection reads.
 _DELIMITERS = (",", ";", "\t")
 _SNIFF_LINES = 50
+#: How many lines are searched for the column names when the header line does not hold them (a header block).
+_BLOCK_LINES = 2000
 # A number written with a decimal comma: digits, one comma, digits (an exponent allowed).
 #: A date (2026-11-20, 20.11.2026, 11/20/2026) or a clock time (09:14) in a cell.
 _CLOCK = re.compile(r"\d:\d\d|\d[-/.]\d{1,2}[-/.]\d")
