@@ -126,12 +126,12 @@ def test_a_labview_tdms_file_is_refused_as_what_it_is(tmp_path):
 
 
 def test_a_gap_in_a_toa5_files_record_numbers_is_refused_with_its_lines(tmp_path):
-    # the logger stopped (power lost, program reloaded) or a collection was appended twice: with Ts= the samples
+    # records overwritten before collection, or a collection appended twice: with Ts= the samples
     # on both sides of the gap were glued into one record without a word
     gap = TOA5_ROWS.replace('"2026-01-01 00:00:02",2,', '"2026-01-01 00:00:09",9,').replace(
         '"2026-01-01 00:00:03",3,', '"2026-01-01 00:00:10",10,')
     f = _write(tmp_path / "gap.dat", TOA5_HEAD + gap)
-    with pytest.raises(ValueError, match=r"column 'RECORD'.*from 1 \(line 6\) to 9 \(line 7\).*7 sample"):
+    with pytest.raises(ValueError, match=r"column 'RECORD'.*from 1 \(line 6\) to 9 \(line 7\).*7 record"):
         gb.load_record_csv(f, u="Power", y="Temp", Ts=1.0)
     twice = _write(tmp_path / "twice.dat", TOA5_HEAD + TOA5_ROWS + TOA5_ROWS.splitlines(keepends=True)[-1])
     with pytest.raises(ValueError, match=r"column 'RECORD'.*from 3 \(line 8\) to 3 \(line 9\)"):

@@ -916,8 +916,9 @@ def load_record_csv(
         samples) is read without options: the names from line 2, the record's units from line 3 (as
         ``units_row=True`` reads a units row), line 4 no sample, and messages name the file's own
         lines; its ``TIMESTAMP`` column holds dates, so give ``Ts`` (``time="TIMESTAMP"`` is
-        refused), and its ``RECORD`` numbers must step by one (a gap, samples lost or repeated, is
-        refused naming its lines). A binary TOB1/TOB2/TOB3 file is refused: convert it to TOA5 with
+        refused), and its ``RECORD`` numbers must step by one (records missing from the file or
+        repeated in it are refused naming the lines; a pause of the logger, whose record numbers
+        run on, shows only in ``TIMESTAMP``, which is not read). A binary TOB1/TOB2/TOB3 file is refused: convert it to TOA5 with
         CardConvert.
     u : str or sequence of str
         Name of the input column, or of several input columns (``["n1", "n2"]``).
@@ -1144,9 +1145,10 @@ def _check_time(p: Path, col: str, t: np.ndarray, lines: np.ndarray, Ts: float |
 
 
 def _check_record_numbers(p: Path, rec: np.ndarray, lines: np.ndarray) -> None:
-    """A ``ValueError`` when a TOA5 file's ``RECORD`` numbers do not step by one from sample to sample: samples lost
-    (the logger stopped, its table was reset) or repeated (a collection appended twice), so the lines either side
-    are no one record at one sampling period."""
+    """A ``ValueError`` when a TOA5 file's ``RECORD`` numbers do not step by one from sample to sample: records
+    missing from the file (overwritten in the logger's memory before they were collected, lines deleted) or repeated
+    in it (a collection appended twice, the table reset), so the lines either side are no one record at one sampling
+    period. (A pause of the logger does not show here: its record numbers run on, and only TIMESTAMP jumps.)"""
     step = np.diff(rec)
     bad = np.flatnonzero(step != 1)
     if not bad.size:
@@ -1156,7 +1158,8 @@ def _check_record_numbers(p: Path, rec: np.ndarray, lines: np.ndarray) -> None:
     where = f"from {a:g} (line {lines[i]}) to {b:g} (line {lines[i + 1]})"
     if b > a:
         raise ValueError(f"{p}: column 'RECORD', the TOA5 file's record numbers, jumps {where}: {b - a - 1:g} "
-                         "sample(s) missing (the logger stopped, or lost them), so the samples either side are no "
+                         "record(s) missing from the file (overwritten in the logger's memory before they were "
+                         "collected, or lines deleted), so the samples either side are no "
                          "one record at one sampling period; cut the file into two records at the gap (several "
                          "records of one plant go to the estimators as a list)")
     raise ValueError(f"{p}: column 'RECORD', the TOA5 file's record numbers, goes back {where}: samples held twice "
