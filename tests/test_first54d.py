@@ -89,7 +89,8 @@ def test_a_damaged_toa5_header_is_refused_with_its_line(tmp_path):
     with pytest.raises(ValueError, match=r"line 3 holds numbers .*TOA5"):
         gb.load_record_csv(no_units, u="Power", y="Temp", Ts=1.0)
     lines = TOA5_HEAD.splitlines(keepends=True)
-    for n, said in ((1, r"line 2: the TOA5 file ends after line 1"), (2, r"line 3: the TOA5 file ends after its column"),
+    for n, said in ((1, r"line 2: the TOA5 file ends after line 1"),
+                     (2, r"line 3: the TOA5 file ends after its column"),
                     (3, r"line 4: the TOA5 file ends after its units")):
         short = _write(tmp_path / "c.dat", "".join(lines[:n]))
         with pytest.raises(ValueError, match=said):
@@ -188,7 +189,8 @@ def test_column_names_commented_out_below_a_header_block_are_named_not_blamed_on
     import io
 
     buf = io.StringIO()
-    np.savetxt(buf, np.array([[0.0, 1, 2], [0.1, 2, 3], [0.2, 3, 4]]), delimiter=",", header="logger v1\nrate: 10 Hz\nt,u,y")
+    np.savetxt(buf, np.array([[0.0, 1, 2], [0.1, 2, 3], [0.2, 3, 4]]), delimiter=",",
+               header="logger v1\nrate: 10 Hz\nt,u,y")
     f = _write(tmp_path / "log.csv", buf.getvalue(), "\n")
     with pytest.raises(ValueError, match=r"line 3 names the columns behind the comment marker '#' .*skiprows=2") as e:
         gb.load_record_csv(f, "u", "y", time="t")

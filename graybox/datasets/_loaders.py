@@ -79,8 +79,8 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
     The encoding (:func:`_utf8`), the delimiter and the decimal mark are detected (:func:`_dialect`)
     unless given. The first ``skiprows`` lines are not read, and an Excel ``sep=X`` line where the
     header belongs gives the delimiter (the header is the line after it). With ``units_row`` the line
-    after the header (blank lines passed over) holds each column's unit: it is read into ``"_units"`` (role -> unit text,
-    brackets dropped) and is no sample. A TOA5 file (:func:`_toa5_options`) sets both, and its line of
+    after the header (blank lines passed over) holds each column's unit: it is read into ``"_units"``
+    (role -> unit text, brackets dropped) and is no sample. A TOA5 file (:func:`_toa5_options`) sets both, and its line of
     processing codes after the units is no sample either; ``None`` is the format's default (0 and False
     for plain CSV). Raises ``ValueError`` naming the file and the line (the file's
     own: line 1 is its first) or column of the first problem.
