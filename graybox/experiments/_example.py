@@ -33,7 +33,9 @@ bundled = "pumping"       # or "buck" (the real buck converter, measured) or "pu
 # table too) names them for the terms (n1(k-1)) when the columns' names are not identifiers, e.g. "speed [rpm]".
 # Static files that repeat an operating point: repeats = "mean" averages the repeats into one point.
 # Files as a logger or a spreadsheet wrote them: skiprows = 3 (a header block above the column names),
-# delimiter = ";", decimal = ",", encoding = "cp1252", time_rtol = 0.01 (stamps printed with few digits).
+# delimiter = ";", decimal = ",", encoding = "cp1252", time_rtol = 0.01 (stamps printed with few digits),
+# units_row = true (a row of units under the names). A Campbell Scientific logger's TOA5 .dat needs none of
+# them (give Ts; its units are read from the file).
 
 # --------------------------------------------------------------------------------- structures
 # Made by FROLS: a candidate space (graybox.Candidates) and a rule (n_terms, tol or criterion).
