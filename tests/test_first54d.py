@@ -215,3 +215,17 @@ def test_a_header_block_longer_than_the_sniffed_lines_is_found(tmp_path):
         gb.load_record_csv(f, "u", "y", time="t")
     assert "delimiter=" not in str(e.value)
     assert gb.load_record_csv(f, "u", "y", time="t", skiprows=60).y.tolist() == [2, 3, 4]
+
+
+def test_a_quote_left_open_on_a_date_does_not_lose_the_sample_silently(tmp_path):
+    # the date's closing quote missing on line 3: the reader took line 3's cells and line 4's opening quote into one
+    # cell, so lines 3 and 4 read as one sample (line 4's values) and line 3's sample was lost without a word
+    f = _write(tmp_path / "dates.csv", '"date",u,y\n"2026-01-01 00:00:00",1,2\n"2026-01-01 00:00:01,2,3\n'
+               '"2026-01-01 00:00:02",3,4\n"2026-01-01 00:00:03",4,5\n', "\n")
+    with pytest.raises(ValueError, match=r"line 3.*a quote \(\"\) opens a field that closes only on line 4.*line 4"):
+        gb.load_record_csv(f, "u", "y", Ts=1.0)
+    with pytest.raises(ValueError, match=r"line 3.*a quote"):
+        gb.load_static_csv(f, "u", "y")
+    # a note over two lines is a cell, as before
+    note = _write(tmp_path / "note.csv", 't,u,y,note\n0,1,2,"first line\nsecond line"\n1,2,3,""\n', "\n")
+    assert gb.load_record_csv(note, "u", "y", time="t").u.tolist() == [1, 2]

@@ -284,17 +284,28 @@ def _refuse_swallowed(p: Path, text: str, row: Sequence[str], start: int, line: 
     """A ``ValueError`` when a quoted cell of the sample on file lines ``line`` to ``end`` (the text's line ``start``
     on) holds lines that read as samples: a quote left open (a note's stray '"') took them in, until a quote
     further on (or the file's end) closed it, and their samples would be lost without a word."""
+    numeric = [j for role, j in index.items() if role != "_stamp"]  # a TOA5 file's TIMESTAMP is read as text
     for i, cell in enumerate(row):
         for piece in cell.splitlines()[1:]:  # a whole line of the file: as many fields as the header, numbers read
             cells = _split(piece, delim)
             if (_width(piece, delim, len(header)) == len(header) > 1
-                    and all(_numeric(cells[j], decimal) for j in index.values())):
+                    and all(_numeric(cells[j], decimal) for j in numeric)):
                 _refuse_open_quote(p, text, start, line, end, header, delim)
                 col = f", column {header[i]!r}" if i < len(header) else ""
                 raise ValueError(f"{p}: line {line}{col}: a quote (\") opens a field that closes only on line {end}, "
                                  f"so lines {line + 1} to {end}, which read as samples ({piece.strip()!r}), would be "
                                  "read as that one cell and their samples lost; close the quote where the cell ends "
                                  "or delete it")
+    # the quote closed by the next line's opening quote (a date's closing quote missing): that line's first cell
+    # ends the cell, its other cells are the sample's, and the sample where the quote opened is lost
+    spanned = itertools.islice(io.StringIO(text, newline=""), start + 1, start + 1 + end - line)
+    for k, physical in enumerate(spanned, start=line + 1):
+        bare = physical.rstrip("\r\n").replace('"', "")
+        cells = _split(bare, delim)
+        if _width(bare, delim, len(header)) == len(header) > 1 and all(_numeric(cells[j], decimal) for j in numeric):
+            raise ValueError(f"{p}: line {line}: a quote (\") opens a field that closes only on line {end}, so line "
+                             f"{k}, which reads as a sample ({physical.strip()!r}), would be read into the sample of "
+                             f"line {line} and one sample lost; close the quote where the cell ends or delete it")
 
 
 def _numeric(cell: str, decimal: str) -> bool:
