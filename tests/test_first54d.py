@@ -229,3 +229,11 @@ def test_a_quote_left_open_on_a_date_does_not_lose_the_sample_silently(tmp_path)
     # a note over two lines is a cell, as before
     note = _write(tmp_path / "note.csv", 't,u,y,note\n0,1,2,"first line\nsecond line"\n1,2,3,""\n', "\n")
     assert gb.load_record_csv(note, "u", "y", time="t").u.tolist() == [1, 2]
+    # in a TOA5 file (its TIMESTAMP read as text) a note's stray quote that takes in whole samples is refused too
+    head = TOA5_HEAD.replace('"Temp"\n', '"Temp","Note"\n').replace('"degC"\n', '"degC",""\n').replace(
+        '"Avg"\n', '"Avg","Smp"\n')
+    rows = ('"2026-01-01 00:00:00",0,10.0,20.1,"ok"\n"2026-01-01 00:00:01",1,10.0,20.2,"oops\n'
+            '2026-01-01 00:00:02,2,12.0,20.4,fine"\n')
+    toa5 = _write(tmp_path / "note.dat", head + rows)
+    with pytest.raises(ValueError, match=r"line 6, column 'Note': a quote"):
+        gb.load_record_csv(toa5, "Power", "Temp", Ts=1.0)
