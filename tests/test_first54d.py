@@ -3,8 +3,13 @@ binary TOB1/2/3 refused as what they are, and the other loggers' ASCII exports a
 
 from __future__ import annotations
 
+import tempfile
+from pathlib import Path
+
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import graybox as gb
 
@@ -237,3 +242,27 @@ def test_a_quote_left_open_on_a_date_does_not_lose_the_sample_silently(tmp_path)
     toa5 = _write(tmp_path / "note.dat", head + rows)
     with pytest.raises(ValueError, match=r"line 6, column 'Note': a quote"):
         gb.load_record_csv(toa5, "Power", "Temp", Ts=1.0)
+
+
+_FINITE = st.floats(allow_nan=False, allow_infinity=False, min_value=-1e12, max_value=1e12)
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.lists(st.tuples(_FINITE, _FINITE), min_size=2, max_size=12), st.sampled_from(["\r\n", "\n"]),
+       st.booleans())
+def test_a_toa5_file_reads_as_the_same_samples_written_as_plain_csv_with_a_units_row(samples, newline, quoted):
+    # the law: TOA5's header lines change how a file is read, never what its samples are
+    q = '"' if quoted else ""
+    rows = "".join(f'{q}2026-01-01 00:{k // 60:02d}:{k % 60:02d}{q},{k},{u!r},{y!r}\n'
+                   for k, (u, y) in enumerate(samples))
+    head = TOA5_HEAD if quoted else TOA5_HEAD.replace('"', "")
+    with tempfile.TemporaryDirectory() as d:
+        toa5 = _write(Path(d) / "t.dat", head + rows, newline)
+        plain = _write(Path(d) / "p.csv", "TIMESTAMP,RECORD,Power,Temp\nTS,RN,W,degC\n" + rows, newline)
+        r = gb.load_record_csv(toa5, u="Power", y="Temp", Ts=1.0)
+        c = gb.load_record_csv(plain, u="Power", y="Temp", Ts=1.0, units_row=True)
+    np.testing.assert_array_equal(r.u, [u for u, _ in samples])
+    np.testing.assert_array_equal(r.y, [y for _, y in samples])
+    np.testing.assert_array_equal(r.u, c.u)
+    np.testing.assert_array_equal(r.y, c.y)
+    assert r.units == c.units == ("W", "degC")
