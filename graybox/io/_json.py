@@ -543,7 +543,7 @@ def _dec_plain(v: Any, where: str, rd: _Reader, depth: int = 0) -> Any:
     if tag == "type":
         t = rd.dict(x, at)
         name = t.get("type")
-        if set(t) != {"type", "object"} or not isinstance(name, str) or name not in _CODECS:
+        if set(t) != {"type", "object"} or not _saved_type(name):
             raise rd.fail(at, f"expected {{\"type\": one of {sorted(_CODECS)}, \"object\": …}}")
         return _decode_fields(name, t["object"], f"{at}.object", rd)
     if tag == "scalar":
@@ -702,6 +702,15 @@ def register_type(name: str, cls: type, spec: tuple[tuple[str, str], ...]) -> No
 
 #: Saved types defined above this layer, by the module whose import registers them (:func:`register_type`).
 _REGISTERED_ABOVE = {"GrayboxSelection": "graybox.experiments._select", "DecimationAdvice": "graybox.datasets._decimation"}
+
+def _saved_type(name: Any) -> bool:
+    """Whether ``name`` (a file's type: the header's, or a saved value's inside a Dataset's extra or a bootstrap's
+    options) is a saved type. A type of a layer above this one registers itself when its module is imported: it is
+    imported by name (as graybox's lazy attributes do), so that a fresh session loads the file."""
+    if isinstance(name, str) and name not in _CODECS and name in _REGISTERED_ABOVE:
+        importlib.import_module(_REGISTERED_ABOVE[name])
+    return isinstance(name, str) and name in _CODECS
+
 
 #: A kind ending so is that kind or None (JSON null).
 _OR_NONE = "_or_none"
@@ -953,11 +962,7 @@ def _header(doc: Any, rd: _Reader) -> dict:
         raise rd.fail("header", f"written by a newer graybox ({doc.get('graybox_version', '?')}, format version {ver}); "
                       f"this graybox ({graybox_version()}) reads format version {FORMAT_VERSION}: upgrade graybox to load it")
     typ = doc.get("type")
-    if isinstance(typ, str) and typ not in _CODECS and typ in _REGISTERED_ABOVE:
-        # a type of a layer above this one registers itself when its module is imported: import it by
-        # name (as graybox's lazy attributes do), so that a fresh session loads the file
-        importlib.import_module(_REGISTERED_ABOVE[typ])
-    if not isinstance(typ, str) or typ not in _CODECS:  # a list or an object cannot even be looked up
+    if not _saved_type(typ):  # a list or an object cannot even be looked up
         raise rd.fail("header", f"unknown type {typ!r}; graybox loads {sorted(_CODECS)}"
                       + _newer(str(doc.get("graybox_version", ""))))
     units = doc.get("units")

@@ -1,0 +1,36 @@
+"""Hunt 54f: saving, loading and the command line (graybox.io, graybox._cli)."""
+
+import json
+
+import numpy as np
+import pytest
+
+import graybox as gb
+from graybox.io import _json as _io
+
+
+def _record(n=200):
+    t = np.arange(n)
+    return gb.Record(np.sin(0.05 * t), np.cos(0.03 * t), Ts=0.1, name="run", units=("V", "m"))
+
+
+def test_a_saved_type_of_a_layer_above_inside_a_plain_map_loads_in_a_fresh_session(tmp_path, monkeypatch):
+    # the header's type was imported by name when a fresh session had not registered it yet, but a saved value inside
+    # a Dataset's extra (or a bootstrap's options) was not: a Dataset saved with a DecimationAdvice in its extra
+    # failed to load in a new session ('expected {"type": one of [...]}'), and loaded in the session that saved it
+    from graybox.datasets._decimation import DecimationAdvice
+
+    rec = _record()
+    text = gb.to_json(gb.Dataset(rec, rec, None, "bench", {"advice": gb.decimation_advice(rec)}))
+    # a fresh session: the type not registered, its module (here a stand-in) registering it when imported
+    (tmp_path / "hunt54f_registers_advice.py").write_text(
+        "from graybox.io._json import register_type\n"
+        "from graybox.datasets._decimation import DecimationAdvice\n"
+        f"register_type('DecimationAdvice', DecimationAdvice, {_io._CODECS['DecimationAdvice'][1]!r})\n",
+        encoding="utf-8")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.setattr(_io, "_CODECS", {k: v for k, v in _io._CODECS.items() if k != "DecimationAdvice"})
+    monkeypatch.setattr(_io, "_TYPES", {k: v for k, v in _io._TYPES.items() if v != "DecimationAdvice"})
+    monkeypatch.setitem(_io._REGISTERED_ABOVE, "DecimationAdvice", "hunt54f_registers_advice")
+    back = gb.from_json(text)
+    assert isinstance(back.extra["advice"], DecimationAdvice)
