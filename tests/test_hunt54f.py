@@ -34,3 +34,14 @@ def test_a_saved_type_of_a_layer_above_inside_a_plain_map_loads_in_a_fresh_sessi
     monkeypatch.setitem(_io._REGISTERED_ABOVE, "DecimationAdvice", "hunt54f_registers_advice")
     back = gb.from_json(text)
     assert isinstance(back.extra["advice"], DecimationAdvice)
+
+
+def test_a_pareto_set_without_members_loads_as_it_was_saved():
+    # a set filtered to no member (ps.subset(ps.JSF <= B) when none is in the band) saved, and loading it failed:
+    # JSON gives back [] for its (0, n) thetas, read as (0, 0) and refused ('thetas must have shape (K, 2)')
+    ps = gb.ParetoSet(gb.Structure(["y(k-1)", "u(k-1)"]), [[0.5, 1.0], [0.4, 1.1]], [1.0, 0.1], [0.1, 0.2],
+                      [0.3, 0.2], [0.0, 0.1], "PE", {"radius": [1.0, 2.0]})
+    empty = ps.subset(ps.JSF < 0)
+    back = gb.from_json(gb.to_json(empty))
+    assert len(back) == 0 and back.thetas.shape == (0, 2) and back.extra["radius"].shape == (0,)
+    assert gb.to_json(back) == gb.to_json(empty)
