@@ -1,6 +1,7 @@
 """Hunt 54f: saving, loading and the command line (graybox.io, graybox._cli)."""
 
 import json
+import math
 
 import numpy as np
 import pytest
@@ -45,3 +46,15 @@ def test_a_pareto_set_without_members_loads_as_it_was_saved():
     back = gb.from_json(gb.to_json(empty))
     assert len(back) == 0 and back.thetas.shape == (0, 2) and back.extra["radius"].shape == (0,)
     assert gb.to_json(back) == gb.to_json(empty)
+
+
+@pytest.mark.parametrize("shape", [[0, 2**62], [2**40, 2**40, 0], [1] * 65])
+def test_a_hand_edited_shape_numpy_cannot_make_is_a_file_error_naming_the_field(shape):
+    # a plain array's shape holding its (zero or one) values, but beyond what NumPy makes: a bare ValueError of
+    # NumPy's ('array is too big', 'maximum supported dimension'), neither the file nor the field named
+    rec = _record()
+    doc = json.loads(gb.to_json(gb.Dataset(rec, rec, None, "", {"empty": np.zeros((0, 3)), "one": np.ones(1)})))
+    key = "one" if math.prod(shape) else "empty"
+    doc["object"]["extra"][key]["array"]["shape"] = shape
+    with pytest.raises(gb.GrayboxFileError, match=rf"edited\.json: object\.extra\.{key}\.array\.shape: "):
+        gb.from_json(json.dumps(doc), source="edited.json")

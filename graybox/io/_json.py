@@ -64,6 +64,7 @@ import json
 import math
 import os
 import re
+import reprlib
 from pathlib import Path
 from collections.abc import Mapping, Sequence
 from typing import Any, Callable
@@ -580,9 +581,13 @@ def _dec_plain(v: Any, where: str, rd: _Reader, depth: int = 0) -> Any:
         raise rd.fail(f"{at}.shape", f"shape {list(shape)} does not hold the {len(data)} values of data")
     try:
         with np.errstate(over="raise"):
-            return _read_only(np.array(data, dtype=dtype).reshape(shape))
+            values = np.array(data, dtype=dtype)
     except (OverflowError, FloatingPointError):
         raise rd.fail(f"{at}.data", f"a value beyond the range of {dtype}") from None
+    try:  # a shape of its values' count, but beyond NumPy's (more than 64 axes, or bytes past the address space)
+        return _read_only(values.reshape(shape))
+    except ValueError as exc:
+        raise rd.fail(f"{at}.shape", f"no array has the shape {reprlib.repr(list(shape))} ({exc})") from None
 
 
 _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
