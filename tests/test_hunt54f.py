@@ -58,3 +58,14 @@ def test_a_hand_edited_shape_numpy_cannot_make_is_a_file_error_naming_the_field(
     doc["object"]["extra"][key]["array"]["shape"] = shape
     with pytest.raises(gb.GrayboxFileError, match=rf"edited\.json: object\.extra\.{key}\.array\.shape: "):
         gb.from_json(json.dumps(doc), source="edited.json")
+
+
+def test_an_empty_tuple_of_expected_types_is_refused_as_a_bad_argument(tmp_path):
+    # expect=() was taken for "any of no type": every file refused with 'holds a Model, expected ' (no type named),
+    # as though the file were wrong, not the call
+    m = gb.Model(gb.Structure(["y(k-1)"]), [0.5])
+    p = gb.save(m, tmp_path / "m.json")
+    for call in (lambda: gb.load(p, expect=()), lambda: gb.from_json(gb.to_json(m), expect=())):
+        with pytest.raises(ValueError, match=r"expect=\(\) names no type") as info:
+            call()
+        assert not isinstance(info.value, gb.GrayboxFileError)

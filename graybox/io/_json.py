@@ -1035,6 +1035,9 @@ def _expected(expect: object) -> tuple[type, ...] | None:
     if expect is None:
         return None
     want = expect if isinstance(expect, tuple) else (expect,)
+    if not want:  # no type at all: every file would be refused as holding the wrong one
+        raise ValueError("expect=() names no type: give a graybox type (e.g. graybox.Model), a tuple of them, or "
+                         "None for any")
     for w in want:
         if not isinstance(w, type):
             raise TypeError(f"expect must be a graybox type (e.g. graybox.Model) or a tuple of them, got {w!r} "
