@@ -69,3 +69,22 @@ def test_an_empty_tuple_of_expected_types_is_refused_as_a_bad_argument(tmp_path)
         with pytest.raises(ValueError, match=r"expect=\(\) names no type") as info:
             call()
         assert not isinstance(info.value, gb.GrayboxFileError)
+
+
+def test_a_result_seeded_beyond_64_bits_loads_as_it_was_saved():
+    # NumPy takes a seed of any size (SeedSequence().entropy is 128 bits), and so do output_error and
+    # bootstrap_decision (check_seed: an integer >= 0); the file held it, but loading refused it as 'an integer
+    # beyond the 64-bit range'
+    import pandas as pd
+
+    seed = 2**100 + 3
+    starts = pd.DataFrame({"start": ["least squares"], "solver": ["trf"], "status": ["fitted"], "message": [""],
+                           "JS_start": [0.2], "JS": [0.1], "JS_choose": [np.nan], "nfev": [3]})
+    oe = gb.OEResult(gb.Model(gb.Structure(["y(k-1)", "u(k-1)"]), [0.5, 1.0]), 0.1, np.nan, "", "least squares",
+                     starts, np.nan, 0.5, seed)
+    back = gb.from_json(gb.to_json(oe))
+    assert back.seed == seed and gb.to_json(back) == gb.to_json(oe)
+    doc = json.loads(gb.to_json(oe))
+    doc["object"]["seed"] = -1
+    with pytest.raises(gb.GrayboxFileError, match=r"object\.seed: a seed is an integer >= 0"):
+        gb.from_json(json.dumps(doc))

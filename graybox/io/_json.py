@@ -154,6 +154,15 @@ class _Reader:
             raise self.fail(where, "an integer beyond the 64-bit range")
         return v
 
+    def seed(self, v: Any, where: str) -> int:
+        """A random generator's seed: an integer >= 0 of any size, as NumPy takes it (a 128-bit one from
+        ``SeedSequence().entropy`` too), not only 64-bit."""
+        if isinstance(v, bool) or not isinstance(v, int):
+            raise self.fail(where, f"expected an integer, got {v!r}")
+        if v < 0:
+            raise self.fail(where, f"a seed is an integer >= 0, got {v}")
+        return v
+
     def str(self, v: Any, where: str) -> str:
         if not isinstance(v, str):
             raise self.fail(where, f"expected a string, got {type(v).__name__}")
@@ -202,9 +211,9 @@ def _enc(kind: str, v: Any, where: str = "") -> Any:
         return None if v is None else _enc(kind[:-len(_OR_NONE)], v, where)
     if kind in ("float", "array1", "array2", "inputs"):
         return _arr(v)
-    if kind in ("int", "str", "bool"):
+    if kind in ("int", "seed", "str", "bool"):
         # a NumPy bool (rho < 1, a comparison of arrays), which the classes take for True or False, is no JSON
-        return int(v) if kind == "int" else bool(v) if kind == "bool" else v
+        return int(v) if kind in ("int", "seed") else bool(v) if kind == "bool" else v
     if kind == "floats":
         return [_num(x) for x in v]
     if kind == "pairs":
@@ -272,6 +281,8 @@ def _dec(kind: str, v: Any, where: str, rd: _Reader) -> Any:
         return rd.array(v, where, 2 if rd.list(v, where) and isinstance(v[0], list) else 1)
     if kind == "int":
         return rd.int(v, where)
+    if kind == "seed":
+        return rd.seed(v, where)
     if kind == "pairs":
         return tuple(rd.floats(p, f"{where}[{i}]") for i, p in enumerate(rd.list(v, where)))
     if kind == "exponents":
@@ -628,7 +639,7 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
                               ("n_iter", "int"), ("message", "str"), ("margin", "float"))),
     "OEResult": (OEResult, (("model", "Model"), ("JS", "float"), ("JS_choose", "float"), ("chosen_on", "str"),
                             ("start", "str"), ("starts", "frame"), ("margin", "float"), ("radius", "float"),
-                            ("seed", "int"))),
+                            ("seed", "seed"))),
     "ParameterUncertainty": (ParameterUncertainty, (("method", "str"), ("model", "Model"), ("cov", "array2"),
                                                     ("level", "float"), ("dof", "int"), ("sigma2", "float"),
                                                     ("constraints", "array2"), ("noise_cov", "array2"),
@@ -670,7 +681,7 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
                               ("selective_pressure", "float"))),
     "DecisionBootstrap": (DecisionBootstrap, (("structure", "structure"), ("estimator", "str"), ("lambdas", "array1"),
                                               ("band", "band"), ("block_length", "int"), ("n_blocks", "int"),
-                                              ("seed", "int"), ("lambda1", "array1"), ("JS", "array1"),
+                                              ("seed", "seed"), ("lambda1", "array1"), ("JS", "array1"),
                                               ("JSF", "array1"), ("in_band", "bool_array1"), ("thetas", "array2"),
                                               ("rules", "names"), ("reference", "plain_map"), ("failures", "failures"),
                                               ("options", "plain_map"), ("static_sigma", "float_or_none"))),
@@ -724,7 +735,7 @@ _OR_NONE = "_or_none"
 _STATIC = ("StaticPoints", "StaticCurve", "StaticSurface")
 
 #: Field kinds other than the saved types themselves.
-_KINDS = frozenset({"float", "array1", "array2", "inputs", "int", "str", "bool", "floats", "pairs", "exponents",
+_KINDS = frozenset({"float", "array1", "array2", "inputs", "int", "seed", "str", "bool", "floats", "pairs", "exponents",
                     "structure", "structures", "names", "arrays", "dict_arrays", "failures", "skipped", "frame",
                     "static", "local_models", "ints", "int_array1", "bool_array1", "texts", "band",
                     "correlation_tests", "plain_map", "float_or_floats"})
