@@ -2,6 +2,8 @@
 
 import json
 import math
+import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -88,3 +90,26 @@ def test_a_result_seeded_beyond_64_bits_loads_as_it_was_saved():
     doc["object"]["seed"] = -1
     with pytest.raises(gb.GrayboxFileError, match=r"object\.seed: a seed is an integer >= 0"):
         gb.from_json(json.dumps(doc))
+
+
+@pytest.mark.parametrize("stem", ["a" * 240, "é" * 120])
+def test_a_file_name_open_writes_is_one_save_writes(tmp_path, monkeypatch, stem):
+    # a name of 245 bytes (a file system takes 255) was refused: the write's own file beside it, the name with
+    # ".host-pid-0badc0de.tmp" added, was too long, and save said 'cannot write in the folder …: File name too long'
+    from graybox.core import _files
+
+    target = tmp_path / f"{stem}.json"
+    m = gb.Model(gb.Structure(["y(k-1)"]), [0.5])
+    gb.save(m, target)
+    assert gb.load(target).theta.tolist() == [0.5]
+    # what a killed write of it left beside it is swept by the next, as beside any other target
+    written = []
+    monkeypatch.setattr(_files.os, "replace", lambda a, b: (written.append(Path(a)), (_ for _ in ()).throw(OSError())))
+    with pytest.raises(OSError):
+        gb.save(m, target)
+    left = written[0].with_name(written[0].name.replace(_files.writer_tag(), "otherhost-1"))
+    left.write_bytes(b"half")
+    monkeypatch.undo()
+    os.utime(left, (0, 0))  # long past the age at which another host's leftover is swept
+    gb.save(m, target)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [target.name]

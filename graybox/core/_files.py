@@ -12,6 +12,7 @@ from __future__ import annotations
 import codecs
 import contextlib
 import errno
+import hashlib
 import os
 import re
 import secrets
@@ -95,10 +96,26 @@ def sweep_leftovers(folder: Path, name: re.Pattern[str], now: float, max_age: fl
     return removed
 
 
+#: Bytes of a target's name that the name of a write's file beside it keeps: a file name holds 255 bytes, and the
+#: write's own part (".host-pid-0badc0de.tmp") up to 86 (a host name of 64, a pid of 7 digits).
+_STEM_BYTES = 255 - 86
+
+
+def _stem(target: Path) -> str:
+    """The part of the name of a write's file beside ``target`` that names the target: its name, or for a name too
+    long to take the write's part beside it (a file name of 170 to 255 bytes, which ``open(target, "w")`` writes),
+    its first bytes and a hash of the whole name (two long names alike in their first bytes keep apart)."""
+    raw = os.fsencode(target.name)
+    if len(raw) <= _STEM_BYTES:
+        return target.name
+    digest = hashlib.blake2s(raw, digest_size=4).hexdigest()
+    return os.fsdecode(raw[:_STEM_BYTES - 9]) + "~" + digest  # bytes as the name's (a character cut: escaped)
+
+
 def _written_beside(target: Path) -> re.Pattern[str]:
     """The names :func:`write_atomically` gives its files beside ``target`` (with the writer's host and pid)."""
     # without host (graybox 0.3.0's checkpoints) or without host and pid (its JSON saves): swept by age only
-    return re.compile(rf"{re.escape(target.name)}\.(?:(?:(?P<host>[^-]+)-)?(?P<pid>\d+)-)?[0-9a-f]{{8}}\.tmp")
+    return re.compile(rf"{re.escape(_stem(target))}\.(?:(?:(?P<host>[^-]+)-)?(?P<pid>\d+)-)?[0-9a-f]{{8}}\.tmp")
 
 
 def _new_file_beside(target: Path) -> tuple[int, Path]:
@@ -113,7 +130,7 @@ def _new_file_beside(target: Path) -> tuple[int, Path]:
     except OSError:
         mode = None
     while True:
-        tmp = target.with_name(f"{target.name}.{writer_tag()}-{secrets.token_hex(4)}.tmp")
+        tmp = target.with_name(f"{_stem(target)}.{writer_tag()}-{secrets.token_hex(4)}.tmp")
         try:  # the umask applies
             fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666 if mode is None else (mode & 0o666) | 0o200)
         except FileExistsError:  # pragma: no cover - a name drawn twice
