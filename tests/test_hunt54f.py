@@ -113,3 +113,20 @@ def test_a_file_name_open_writes_is_one_save_writes(tmp_path, monkeypatch, stem)
     os.utime(left, (0, 0))  # long past the age at which another host's leftover is swept
     gb.save(m, target)
     assert sorted(p.name for p in tmp_path.iterdir()) == [target.name]
+
+
+def test_a_subclass_of_a_saved_type_inside_a_value_is_refused_naming_the_field():
+    # a value holding a user's subclass of Model or Record (a field the class takes, isinstance) crashed to_json with
+    # a bare KeyError of the subclass; at the top a subclass was refused with a ValueError ('cannot save a MyModel')
+    class MyModel(gb.Model):
+        pass
+
+    class MyRecord(gb.Record):
+        pass
+
+    m = MyModel(gb.Structure(["y(k-1)"]), [0.5])
+    r = MyRecord(np.ones(20), np.ones(20))
+    for value, field in ((gb.CLSResult(m, None, (), "closed"), "CLSResult.model"),
+                         (gb.Dataset(r, gb.Record(np.ones(20), np.ones(20))), "Dataset.ident")):
+        with pytest.raises(ValueError, match=rf"cannot save {field}: a My\w+, a subclass of (Model|Record)"):
+            gb.to_json(value)

@@ -221,9 +221,9 @@ def _enc(kind: str, v: Any, where: str = "") -> Any:
     if kind == "exponents":
         return [[int(x) for x in e] for e in v]
     if kind == "static":
-        return {"type": _TYPES[type(v)], "object": _encode_fields(v)}
+        return {"type": _saved_name(v, where), "object": _encode_fields(v, where)}
     if kind == "local_models":
-        return [_encode_fields(m) for m in v]
+        return [_encode_fields(m, f"{where}[{i}]") for i, m in enumerate(v)]
     if kind == "structure":
         return [str(t) for t in v]
     if kind == "structures":
@@ -251,7 +251,7 @@ def _enc(kind: str, v: Any, where: str = "") -> Any:
     if kind in ("band", "float_or_floats"):
         return _num(v) if np.ndim(v) == 0 else [_num(x) for x in v]
     if kind == "correlation_tests":
-        return {str(k): _encode_fields(t) for k, t in dict(v).items()}
+        return {str(k): _encode_fields(t, f"{where}[{k!r}]") for k, t in dict(v).items()}
     if kind == "plain_map":
         try:
             return _enc_plain_map(v, where)
@@ -264,7 +264,7 @@ def _enc(kind: str, v: Any, where: str = "") -> Any:
                              f"dataclasses.replace(data, extra={{k: v for k, v in data.extra.items() if k not in "
                              f"{bad!r}}})") from None
     if kind in _CODECS:
-        return _encode_fields(v)
+        return _encode_fields(v, where)
     raise AssertionError(kind)  # pragma: no cover - a codec table error
 
 
@@ -821,8 +821,20 @@ _KEPT: dict[str, tuple[str, Callable[[Any], Any], Callable[[Any, Any, str, "_Rea
 }
 
 
-def _encode_fields(obj: Any) -> dict:
-    name = _TYPES[type(obj)]
+def _saved_name(obj: Any, where: str) -> str:
+    """The saved type's name of ``obj``, held in the field ``where``; ``ValueError`` for a value of another type (a
+    subclass of a saved type: a file holds graybox's own types, and would read it back without the subclass)."""
+    name = _TYPES.get(type(obj))
+    if name is None:
+        base = next((c.__name__ for c in type(obj).__mro__[1:] if c in _TYPES), None)
+        raise ValueError(f"cannot save {where or 'the value'}: a {type(obj).__name__}"
+                         + (f", a subclass of {base}; a file holds graybox's own types, and would load it as a "
+                            f"{base}: give a {base}" if base else ", which graybox does not save"))
+    return name
+
+
+def _encode_fields(obj: Any, where: str = "") -> dict:
+    name = _saved_name(obj, where)
     out = {k: _enc(kind, getattr(obj, k), f"{name}.{k}") for k, kind in _CODECS[name][1]}
     if name in _READABLE:
         out.update(_READABLE[name][1](obj))
