@@ -69,7 +69,14 @@ def _grid(args: argparse.Namespace) -> int:
     from .core._validation import check_workers
 
     if args.grid_command == "init":
-        sys.stdout.write(gx.EXAMPLE_SPEC)
+        try:
+            sys.stdout.write(gx.EXAMPLE_SPEC)
+            sys.stdout.flush()  # a full disk (grid init > spec.toml) says so here, not in a traceback at exit
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            print(f"graybox grid init: {exc}", file=sys.stderr)
+            return 2
         return 0
     try:
         if args.grid_command == "run":

@@ -130,3 +130,23 @@ def test_a_subclass_of_a_saved_type_inside_a_value_is_refused_naming_the_field()
                          (gb.Dataset(r, gb.Record(np.ones(20), np.ones(20))), "Dataset.ident")):
         with pytest.raises(ValueError, match=rf"cannot save {field}: a My\w+, a subclass of (Model|Record)"):
             gb.to_json(value)
+
+
+def test_grid_init_into_a_full_disk_is_a_line_not_a_traceback(monkeypatch, capsys):
+    # graybox grid init > spec.toml on a full disk (or > /dev/full) ended in a traceback of the OSError, where every
+    # other command says its OSError in one line with exit status 2
+    import errno
+    import io
+
+    from graybox._cli import main
+
+    class Full(io.StringIO):
+        def write(self, text):
+            raise OSError(errno.ENOSPC, "No space left on device")
+
+        def flush(self):
+            raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr("sys.stdout", Full())
+    assert main(["grid", "init"]) == 2
+    assert capsys.readouterr().err == "graybox grid init: [Errno 28] No space left on device\n"
