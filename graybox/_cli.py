@@ -40,6 +40,17 @@ def _folder_arg(text: str) -> Path:
     return Path(text)
 
 
+def _file_arg(text: str) -> Path:
+    """``--store`` of grid run: a file's name (``Path("out/")`` is ``out``: the store was made as a file named as the
+    folder meant)."""
+    from .core._validation import check_path
+
+    try:
+        return Path(check_path(text, "the store", file=True))
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
 def _band_arg(text: str) -> tuple[str | None, float]:
     """``--band``: ``B`` (every data set) or ``NAME=B`` (that data set; a name may hold '=': the last one splits)."""
     name, eq, value = text.rpartition("=")
@@ -215,7 +226,7 @@ def _main(argv: list[str] | None) -> int:
     gsub.add_parser("init", help="print a commented example spec for the bundled plant (graybox grid init > spec.toml)")
     run = gsub.add_parser("run", help="run the cells of a spec that are not in the store yet")
     run.add_argument("spec", type=Path, help="the grid's TOML spec")
-    run.add_argument("--store", type=Path, required=True, help="SQLite file for the results (created if missing)")
+    run.add_argument("--store", type=_file_arg, required=True, help="SQLite file for the results (created if missing)")
     where = run.add_mutually_exclusive_group()
     where.add_argument("--workers", type=int, metavar="N", help="start a Dask LocalCluster of N worker processes")
     where.add_argument("--scheduler", metavar="ADDRESS", help="run on the Dask scheduler at this address (e.g. tcp://host:8786)")

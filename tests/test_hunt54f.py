@@ -150,3 +150,32 @@ def test_grid_init_into_a_full_disk_is_a_line_not_a_traceback(monkeypatch, capsy
     monkeypatch.setattr("sys.stdout", Full())
     assert main(["grid", "init"]) == 2
     assert capsys.readouterr().err == "graybox grid init: [Errno 28] No space left on device\n"
+
+
+@pytest.mark.parametrize("call", [
+    lambda folder: gb.save(gb.Model(gb.Structure(["y(k-1)"]), [0.5]), folder),
+    lambda folder: gb.load(folder),
+    lambda folder: gb.read_header(folder),
+    lambda folder: gb.load_results(folder),
+    lambda folder: gb.experiments.run_grid("spec.toml", folder),  # the store checked before the spec is read
+])
+def test_a_path_ending_in_a_folder_separator_is_no_file_name(tmp_path, monkeypatch, call):
+    # gb.save(m, "results/") wrote a FILE named results (Path drops the '/'), where open("results/", "w") refuses;
+    # graybox grid run --store out/ made an SQLite file named out; load("m.json/") read m.json
+    monkeypatch.chdir(tmp_path)
+    gb.save(gb.Model(gb.Structure(["y(k-1)"]), [0.5]), "results")  # a file the name without '/' would reach
+    with pytest.raises(ValueError, match=r"'results/' ends in a folder separator, so it names a folder"):
+        call("results/")
+    assert [p.name for p in tmp_path.iterdir()] == ["results"]
+
+
+def test_grid_run_into_a_store_named_as_a_folder_is_refused_before_any_cell(tmp_path, monkeypatch, capsys):
+    from graybox._cli import main
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "spec.toml").write_text(gb.experiments.EXAMPLE_SPEC, encoding="utf-8")
+    with pytest.raises(SystemExit) as exc:  # argparse's: the spec is not read, no cell runs
+        main(["grid", "run", "spec.toml", "--store", "out/"])
+    assert exc.value.code == 2
+    assert "argument --store: the store 'out/' ends in a folder separator" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["spec.toml"]

@@ -567,13 +567,19 @@ def check_path(value: object, name: str, *, file: bool = False) -> str | os.Path
     """``value`` if it is a file or folder name (``str`` or path-like), or ``TypeError`` naming ``name``.
 
     Python's own message for ``Path(2.5)`` names neither the option nor what it wanted. ``file``: a file's name,
-    where an empty one is a ``ValueError`` (``Path("")`` is the current folder: "Is a directory: '.'").
+    where an empty one is a ``ValueError`` (``Path("")`` is the current folder: "Is a directory: '.'"), and so is one
+    ending in a folder separator (``Path("out/")`` is ``out``: a file where the user named a folder).
     """
     if not isinstance(value, (str, os.PathLike)):
         raise TypeError(f"{name} must be a file or folder name (str or path-like), got {value!r} "
                         f"({type(value).__name__})")
     if file and not os.fspath(value):
         raise ValueError(f"{name} is empty: give the file's name")
+    text = os.fspath(value)
+    if file and isinstance(text, str) and text.endswith(tuple(s for s in (os.sep, os.altsep, "/") if s)):
+        # a folder's name ('results/'): Path drops the separator, and the file was written (or read) as 'results'
+        raise ValueError(f"{name} {text!r} ends in a folder separator, so it names a folder, not a file: give a file's "
+                         f"name (in that folder: {text}NAME)")
     return value
 
 

@@ -15,7 +15,7 @@ from .. import _api as gb
 
 from ..core._progress import progress_bar
 from ..core._reprs import bound_text
-from ..core._validation import FrozenMap, check_bool, check_fields
+from ..core._validation import FrozenMap, check_bool, check_fields, check_path
 from ._cell import STATUSES, failed_row, run_cell
 from ._executors import WORKER_TIMEOUT, make_executor, session
 from ._spec import Grid, SpecError, reads_uncertainty, stored_spec
@@ -172,6 +172,7 @@ def run_grid(
     """
     t0 = time.perf_counter()
     # the options before the data are read or the store is touched
+    store = check_path(store, "store", file=True)
     retry_failed = check_bool(retry_failed, "retry_failed")
     if progress is not None:
         check_bool(progress, "progress")
