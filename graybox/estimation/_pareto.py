@@ -137,7 +137,7 @@ class ParetoSet(Relocked):
         names = model_input_names(self.structure, self.input_names)
         object.__setattr__(self, "input_names", names)
         th = frozen(self.thetas)
-        if th.size == 0 and th.ndim == 2 and th.shape[0] == 0:  # no member (a JSON file gives back [] for none)
+        if th.shape == (0, 0):  # no member (a JSON file gives back [] for none)
             th = frozen(np.zeros((0, len(self.structure))))
         if th.ndim != 2 or th.shape[1] != len(self.structure):
             raise ValueError(f"thetas must have shape (K, {len(self.structure)}), got {th.shape}")
