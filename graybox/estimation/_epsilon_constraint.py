@@ -127,15 +127,6 @@ class _GN:
         self.p = problem
         self.M = len(problem.static)
 
-    def of_theta(self, th: np.ndarray) -> tuple[float, float]:
-        """J_S and J_SF of θ itself, on the records as given (inf where not finite)."""
-        p = self.p
-        with np.errstate(over="ignore", invalid="ignore"):
-            ed, es, _, _ = p.residuals(th, jacobian=False)
-            r1, r2 = ed / np.sqrt(p.n_dyn), es / np.sqrt(self.M)
-            return (float(r1 @ r1) if np.all(np.isfinite(r1)) else np.inf,
-                    float(r2 @ r2) if np.all(np.isfinite(r2)) else np.inf)
-
     def parts(self, z: np.ndarray, jac: bool):
         # a start whose free run diverges has finite residuals too large to square: J_S is then inf, said by the
         # caller (no bounded free run), not by numpy's "overflow encountered in matmul" (an error under -W error)
@@ -573,9 +564,10 @@ def _solve_one_thread(problem: SEProblem, *, band, theta0, lambdas, max_iter, to
         inside = [t for t in runs if t[1][2] <= g_min * (1 + _JSF_TIE)]
     start, (th, f, g, f0, g0, it, message) = min(inside, key=lambda t: t[1][1])
     it = sum(r[5] for _, r in runs)
-    # J_S and J_SF of the model returned (its θ on the records as given: the shared definitions), where the runs
-    # were judged on their z; the two differ by the round-off of θ (1e-12 relative here, more far from zero)
-    f, g = gn.of_theta(th)
+    # J_S and J_SF as the run computed them at its last z (the shared definitions, on the centred signals for a
+    # centred problem: the same errors to round-off). Those of raw θ on the records as given carried the offsets'
+    # powers: at y + 1e7 (1e9 of y's spreads) J_S came out 2.5e-6 and J_SF 6e-6 off relative, so the result
+    # depended on the output's zero well beyond the final model's rounding
     feasible = bool(g <= band * (1 + 1e-12))
     name = "SE D_SF (direct)" if feasible else "SE min J_SF (band infeasible)"
     # the records' input order (not the structure's name order): an input array's columns as the user has them

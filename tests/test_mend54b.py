@@ -1,0 +1,61 @@
+"""mend54b: offsets and units in the simulation-error and uncertainty paths."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+import graybox as gb
+from graybox.selection._centring import closure
+
+_TRUE = gb.Structure(["y(k-1)", "u(k-1)", "u(k-1)y(k-1)", "u(k-2)^2"])
+_THETA = np.array([0.5, 0.3, 0.2, 0.1])
+_CLOSED = closure(_TRUE)  # with 1 and u(k-2): closed under shifts, so se_dsf fits it in centred coordinates
+_UB = np.linspace(-0.9, 0.9, 7)
+
+
+def _on_grid(v: np.ndarray) -> np.ndarray:
+    """``v`` on the grid 2⁻³⁰: any offset up to 2²² moves it exactly, so the data are the same to the last bit."""
+    return np.round(v * 2.0 ** 30) / 2.0 ** 30
+
+
+def _small_plant(n: int = 200, seed: int = 2, ky: float = 0.01) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """u, y and the static points' ȳ of a small plant whose output's spread is ``ky`` (about)."""
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(-1.0, 1.0, n // 5 + 1), 5)[:n]
+    m = gb.Model(_TRUE, _THETA)
+    y = _on_grid(ky * (m.simulate(u, np.zeros(2)) + 0.02 * rng.standard_normal(n)))
+    yb = _on_grid(ky * (m.static_curve(_UB) + 0.05 * np.sin(3 * _UB)))
+    return u, y, yb
+
+
+def _dsf_at(oy: float) -> gb.DSFResult:
+    u, y, yb = _small_plant()
+    assert np.array_equal((y + oy) - oy, y) and np.array_equal((yb + oy) - oy, yb)  # the offset is exact
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # static-range and slow-mode notes: the same at both offsets
+        return gb.se_dsf(_CLOSED, gb.Record(u, y + oy), gb.StaticPoints(_UB, yb + oy), band=0.0005 * 0.01 ** 2,
+                         margin=None, lambdas=[0.5], pe_lambdas=[0.01, 0.1])
+
+
+def _dsf_from_theta0(oy: float) -> gb.DSFResult:
+    from graybox.selection._centring import shift_map
+    u, y, yb = _small_plant()
+    A, t = shift_map(_CLOSED, {"y": oy, "u": 0.0})
+    theta0 = A @ np.r_[0.5, 0.003, 0.2, 0.001, 0.0, 0.0] + t  # the plant's model (y in its units) at y + oy
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return gb.se_dsf(_CLOSED, gb.Record(u, y + oy), gb.StaticPoints(_UB, yb + oy), band=0.0005 * 0.01 ** 2,
+                         margin=None, theta0=theta0)
+
+
+def test_se_dsf_reports_the_errors_of_its_own_coordinates_at_a_far_output_offset():
+    # J_S and J_SF were recomputed from the raw θ on the records as given, whose parameters carry the offsets'
+    # powers (a constant of 2e6 for a spread of 0.01): at y + 2²² (the data the same to the last bit) they came out
+    # 5.7e-7 and 2.1e-6 off relative from y + 0, where the fit itself, made in centred coordinates, was the same to 1e-9
+    a, b = _dsf_from_theta0(0.0), _dsf_from_theta0(2.0 ** 22)
+    assert a.in_band and b.in_band
+    assert b.JS == pytest.approx(a.JS, rel=2e-8, abs=0)
+    assert b.JSF == pytest.approx(a.JSF, rel=2e-8, abs=0)
