@@ -59,3 +59,66 @@ def test_se_dsf_reports_the_errors_of_its_own_coordinates_at_a_far_output_offset
     assert a.in_band and b.in_band
     assert b.JS == pytest.approx(a.JS, rel=2e-8, abs=0)
     assert b.JSF == pytest.approx(a.JSF, rel=2e-8, abs=0)
+
+
+# -- 2. cls_uncertainty and pe_uncertainty at an offset of y ---------------------------------------------------------
+
+_QUADRATIC = closure(gb.Structure(["y(k-1)", "u(k-1)", "y(k-1)^2", "u(k-1)y(k-1)"]))  # with 1: closed under shifts
+
+
+def _quadratic_plant(n: int = 200) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(2)
+    u = np.repeat(rng.uniform(-1.0, 1.0, n // 5 + 1), 5)[:n]
+    m = gb.Model(gb.Structure(["y(k-1)", "u(k-1)", "y(k-1)^2", "u(k-1)y(k-1)"]), np.array([0.5, 0.3, -0.1, 0.1]))
+    y = _on_grid(m.simulate(u, np.zeros(2)) + 0.02 * rng.standard_normal(n))
+    return u, y, _on_grid(m.static_curve(_UB) + 0.05 * np.sin(3 * _UB))
+
+
+def _at(model: gb.Model, oy: float) -> gb.Model:
+    """The same model on y + oy (the last digits of its θ rounded there)."""
+    from graybox.selection._centring import shift_map
+    A, t = shift_map(model.structure, {"y": oy, "u": 0.0})
+    return model.with_theta(A @ model.theta + t)
+
+
+# y(k-1)^2 and u(k-1)y(k-1): their coefficients are the same at any offset of y, and so must their std be
+_SAME = [2, 3]
+
+
+@pytest.mark.parametrize("lam, oy, rel", [(0.5, 2.0 ** 20, 1e-4), (1e-3, 2.0 ** 14, 1e-3)])
+def test_pe_uncertainty_is_the_same_at_an_offset_of_y(lam, oy, rel):
+    # computed on the raw signals, where y(k-1)^2 at y + 2^20 carries the offset's powers: the covariance was
+    # refused as "not identifiable" at y + 2^20 (λ1 = 0.5) and y + 2^18 (λ1 = 1e-3), and 2.4e-6 off at y + 2^14,
+    # where pe_pareto (which centres) fits the same model at every offset
+    u, y, yb = _quadratic_plant()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # static-range notes: the same at both offsets
+        m0 = gb.pe_pareto(_QUADRATIC, gb.Record(u, y), gb.StaticPoints(_UB, yb), lambdas=[lam]).member_model(0)
+        a = gb.pe_uncertainty(m0, gb.Record(u, y), gb.StaticPoints(_UB, yb), lambda1=lam)
+        b = gb.pe_uncertainty(_at(m0, oy), gb.Record(u, y + oy), gb.StaticPoints(_UB, yb + oy), lambda1=lam)
+    np.testing.assert_allclose(b.std[_SAME], a.std[_SAME], rtol=rel, atol=0)
+    assert b.sigma2 == pytest.approx(a.sigma2, rel=1e-12, abs=0)
+    assert b.static_sigma2 == pytest.approx(a.static_sigma2, rel=rel, abs=0)
+
+
+@pytest.mark.parametrize("how", ["none", "points", "band"])
+def test_cls_uncertainty_is_the_same_at_an_offset_of_y(how):
+    # on the raw signals: plain least squares refused as "not identifiable" at y + 2^20, static points 2.4e-4 off at
+    # y + 2^18, and a static band counted all 21 rows active at y + 2^20 (the std of u(k-1)y(k-1) 100 % off)
+    u, y, yb = _quadratic_plant()
+    oy = 2.0 ** 20
+
+    def kw(o):
+        if how == "points":
+            return {"static": gb.StaticPoints(_UB[::3], yb[::3] + o), "how": "points"}
+        if how == "band":
+            return {"constraints": gb.StaticBand(0.03, points=gb.StaticPoints(_UB, yb + o))}
+        return {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fit = gb.cls(_QUADRATIC, gb.Record(u, y), **kw(0.0))
+        a = gb.cls_uncertainty(fit, gb.Record(u, y), **kw(0.0))
+        b = gb.cls_uncertainty(_at(fit.model, oy), gb.Record(u, y + oy), **kw(oy))
+    assert b.constraints.shape == a.constraints.shape
+    np.testing.assert_allclose(b.std[_SAME], a.std[_SAME], rtol=1e-4, atol=0)
+    assert b.sigma2 == pytest.approx(a.sigma2, rel=1e-4, abs=0)

@@ -56,11 +56,12 @@ import scipy.linalg
 from scipy import stats
 
 from ..static._constraints import StaticConstraint, static_cluster_map, static_rows
-from ..estimation._prediction_error import _cls_setup, _dynamic, _pe_setup, _process_structure, centred_eq_rank
+from ..estimation._prediction_error import (_centred_affine, _centred_context, _cls_setup, _data, _Data, _dynamic,
+                                             _pe_setup, _process_structure, centrable, centred_eq_rank)
 from ..static._curves import StaticCurve
 from ..static._surfaces import StaticSurface
 from ..estimation._decisions import Decision
-from ..models._coerce import as_model, records_of, static_points
+from ..models._coerce import as_model, records_of, static_info, static_points
 from ..models._model import Model
 from ..core._least_squares import check_rows, one_blas_thread, rank_tolerance
 from ..core._simulation_kernels import free_run_sensitivity_blocks, inverse_ma_filter
@@ -69,6 +70,7 @@ from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, c
 from ..core._regressors import record_signals, refuse_non_finite_columns, regressor_columns, regressor_matrix
 from ._residuals import _model_residuals
 from ..estimation._simulation_error import SEProblem
+from ..selection._centring import shift_map
 from ..estimation._extended_least_squares import _ma_coefficients, _pure_lags
 from ..static._analysis import one_input_levels, reached_equilibria
 from ..static._linearisation import static_gain_gradient, static_gains, static_powers, static_theta_gradient_of
@@ -520,7 +522,8 @@ def _to_theta(cov_z: tuple[np.ndarray, np.ndarray], s: np.ndarray) -> tuple[np.n
 
 
 def _check_stationary(Z: np.ndarray, A: np.ndarray, r: np.ndarray, rest2: float, size: float, what: str,
-                      hint: str, rows: int, rtol: float = 1e-6, z: np.ndarray | None = None) -> None:
+                      hint: str, rows: int, rtol: float = 1e-6, z: np.ndarray | None = None,
+                      z_round: np.ndarray | None = None) -> None:
     """θ̂ must be the optimum of the problem whose covariance is asked for.
 
     The objective is ‖r‖² + rest2 with residuals r = A z − c (A in the scaled coordinates z, rest2
@@ -532,7 +535,8 @@ def _check_stationary(Z: np.ndarray, A: np.ndarray, r: np.ndarray, rest2: float,
     rank rule (A standing for ``rows`` regression rows). With ``z`` (the estimate in A's coordinates) the
     round-off of forming A z, ‖A‖ ‖z‖ eps, is allowed too: where the terms cancel (u = −50 ± 0.0015 with a u² term,
     ‖z‖ = 6e8 for fitted values of order 1) an estimate accurate to its last digits left 2e-6 of its residual
-    along the free directions and was refused as no optimum.
+    along the free directions and was refused as no optimum. ``z_round``: the round-off of each entry of ``z``
+    where z was mapped from θ (the centred parameters of a closed structure, :class:`_FitCoordinates`), allowed too.
     """
     if Z.shape[1] == 0:
         return  # the constraints fix θ: nothing left to optimise
@@ -540,6 +544,8 @@ def _check_stationary(Z: np.ndarray, A: np.ndarray, r: np.ndarray, rest2: float,
     g = float(np.linalg.norm(U[:, S > rank_tolerance(S[0], rows, S.size)].T @ r)) if S.size and S[0] > 0 else 0.0
     whole = float(np.sqrt(r @ r + rest2))
     cancel = 0.0 if z is None else 1e-15 * float(np.linalg.norm(A, 2) * np.linalg.norm(z))
+    if z_round is not None:
+        cancel += float(np.linalg.norm(np.abs(A) @ z_round))
     if not np.isfinite(g) or g > rtol * whole + 1e-11 * size + cancel:
         raise ValueError(f"{what}: the model's θ is not the optimum of this problem (a fraction "
                          f"{g / max(whole, 1e-300):.1e} of its residual lies along the directions θ may move); {hint}")
@@ -564,7 +570,8 @@ def _lambda_arg(model: object, lambda1: float | None, what: str) -> float:
 
 
 def _equalities(cons: list[StaticConstraint], ctx, theta: np.ndarray, s: np.ndarray, what: str,
-                fit: np.ndarray, rows: int, scale: float) -> np.ndarray:
+                fit: np.ndarray, rows: int, scale: float, affine=None,
+                theta_round: np.ndarray | None = None) -> np.ndarray:
     """Equality rows and the inequality rows active at θ (engineering units); user constraints refused.
 
     A row is measured in the estimators' scaled coordinates z = s ⊙ θ (each z_j in output units): a
@@ -577,7 +584,10 @@ def _equalities(cons: list[StaticConstraint], ctx, theta: np.ndarray, s: np.ndar
     it does not move with the units or offsets of u and y: against 1e-6 ‖z‖, with u = 1e4 ± 1
     (‖z‖ = 3e7) every row of a band 0.06 wide counted as active, and the covariance was that of a
     model held on all of them. Where the factors leave θ free (not identifiable without the
-    constraints) the Euclidean rule is kept: within 1e-6 ‖z‖ of each hyperplane.
+    constraints) the Euclidean rule is kept: within 1e-6 ‖z‖ of each hyperplane. ``affine(c)``: a
+    constraint's rows in the coordinates of ``theta`` (default ``c.affine(ctx)``; those of the centred
+    parameters for a fit on the centred signals, :class:`_FitCoordinates`), with ``theta_round`` the round-off of
+    each entry of ``theta`` mapped there, allowed too.
     """
     n = theta.size
     z = theta * s
@@ -585,44 +595,51 @@ def _equalities(cons: list[StaticConstraint], ctx, theta: np.ndarray, s: np.ndar
     Rf = np.linalg.qr(np.asarray(fit, float), mode="r")
     sv = np.linalg.svd(Rf, compute_uv=False)
     whiten = Rf if sv.size == n and sv[0] > 0 and sv[-1] > rank_tolerance(sv[0], rows, n) else None
+    dz = None if theta_round is None else theta_round * s  # the round-off of z (a θ mapped to centred parameters)
 
-    def gap(A: np.ndarray, r: np.ndarray) -> np.ndarray:
-        """How far the fit is from each inequality's hyperplane (output units), or the Euclidean distance in z."""
+    def gap(A: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """How far the fit is from each inequality's hyperplane (output units), or the Euclidean distance in z;
+        and how far the round-off of z (``dz``) can move it (zeros without)."""
         if whiten is None:
             return off(A, r)
         # min ‖Rf Δz‖ subject to a·Δz = r is |r| / ‖Rf⁻ᵀ a‖
         W = scipy.linalg.solve_triangular(whiten, (A / s).T, trans="T")
         nrm = np.linalg.norm(W, axis=0)
-        return r / np.where(nrm > 0, nrm, 1.0)
+        return _scaled(A, r, np.where(nrm > 0, nrm, 1.0))
 
-    def off(A: np.ndarray, r: np.ndarray) -> np.ndarray:
-        """Distance of z from each row's hyperplane (signed like ``r``, output units)."""
+    def off(A: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Distance of z from each row's hyperplane (signed like ``r``, output units), and its round-off."""
         nrm = np.linalg.norm(A / s, axis=1)
-        return r / np.where(nrm > 0, nrm, 1.0)
+        return _scaled(A, r, np.where(nrm > 0, nrm, 1.0))
+
+    def _scaled(A: np.ndarray, r: np.ndarray, nrm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return r / nrm, (np.zeros(r.shape) if dz is None else (np.abs(A / s) @ dz) / nrm)
 
     # a row holds (or is active) within 1e-6 of the spread, or of the round-off of z itself in this metric
     # (‖Rf‖ ‖z‖ eps: u = −50 ± 0.0015 with a u² term, cond 8e10, left an active band row 2.4e-6 of the spread off
     # its hyperplane); equalities and inequalities alike (against 1e-6 ‖z‖, at u = 1e4 ± 1 an equality the model
-    # missed by 0.3 of outputs of order 1 held)
+    # missed by 0.3 of outputs of order 1 held); and within what the last digits of a θ mapped to the centred
+    # parameters move the row (per row: a bound over all rows counted rows active that were not, at y + 1e6)
     near = 1e-6 * scale + 1e-15 * float(np.linalg.norm(whiten, 2) * np.linalg.norm(z)) if whiten is not None else tol
     rows = [np.zeros((0, n))]
     for c in cons:
-        r = c.affine(ctx)
+        r = c.affine(ctx) if affine is None else affine(c)
         if r is None:
             raise ValueError(f"{what}: {c.describe()} is not affine in θ; the covariance is defined for affine "
                              "constraints (equalities, bands, gain and cluster bounds) only")
         if r.n_eq:
-            if np.any(np.abs(gap(r.A_eq, r.A_eq @ theta - r.b_eq)) > near):
+            miss, rounding = gap(r.A_eq, r.A_eq @ theta - r.b_eq)
+            if np.any(np.abs(miss) > near + rounding):
                 raise ValueError(f"{what}: the model does not satisfy {c.describe()}; was it estimated with these "
                                  "constraints, data and reference (Σ*_y)?")
             rows.append(np.asarray(r.A_eq))
         if r.n_ub:
-            slack = gap(r.A_ub, r.b_ub - r.A_ub @ theta)
-            if np.any(slack < -near):
+            slack, rounding = gap(r.A_ub, r.b_ub - r.A_ub @ theta)
+            if np.any(slack < -(near + rounding)):
                 # a broken row would count as active below: the covariance of another problem, said as the model's
                 raise ValueError(f"{what}: the model does not satisfy {c.describe()}; was it estimated with these "
                                  "constraints, data and static points?")
-            rows.append(np.asarray(r.A_ub)[slack <= near])
+            rows.append(np.asarray(r.A_ub)[slack <= near + rounding])
     return np.vstack(rows)
 
 
@@ -780,6 +797,44 @@ def _pseudo_linear_cov(A: np.ndarray, G: np.ndarray, sigma2: float, what: str) -
         return sigma2 * (K @ K.T), np.sqrt(sigma2) * K.T
 
 
+class _FitCoordinates:
+    """The parameters a CLS or PE estimate was fitted in, and the map of its covariance back to θ.
+
+    For a structure closed under shifts (fitted on the signals less their means, :func:`~graybox.estimation.
+    _prediction_error._data`) these are θ_c, the parameters on the centred signals (θ = A θ_c + t), with the static
+    points and the constraints' rows made on the centred signals too; else θ itself. The covariance is computed
+    there and mapped back (A cov_c Aᵀ): on the raw signals a quadratic in y(k-1) at y + 1e4 carried the offset's
+    powers into the regressors, and the covariance came out 2.3 times off (mapped to θ_c), at y + 1e6 refused as
+    "not identifiable", where the estimators (which centre) fit the same model at every offset."""
+
+    def __init__(self, d: _Data, cons: list[StaticConstraint], ctx, theta: np.ndarray):
+        self.d = d
+        self.centred = d.A is not None
+        if not self.centred:
+            self.theta, self.ctx, self.affine, self.round = np.asarray(theta, float), ctx, None, None
+            return
+        self.Ainv, tinv = shift_map(d.structure, {k: -v for k, v in d.offsets.items()})
+        self.theta = self.Ainv @ theta + tinv
+        # θ as stored carries the offsets' powers: its last digits, mapped here, are this much of θ_c (the rounding
+        # of the model the user holds, which the checks of θ̂ against its problem must allow)
+        self.round = np.finfo(float).eps * (np.abs(self.Ainv) @ np.abs(theta) + np.abs(tinv))
+        self.ctx = _centred_context(ctx, d)
+        self.affine = lambda c: _centred_affine(c, ctx, self.ctx, d)
+
+    def points(self, pts: StaticPoints) -> StaticPoints:
+        """The static points on the signals the fit ran on."""
+        return self.d.run_points(pts) if self.centred else pts
+
+    def back(self, cov: np.ndarray, F: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The covariance, its factor (cov = FᵀF) and the constraint rows of the fit's parameters, in θ."""
+        if not self.centred:
+            return cov, F, rows
+        # the covariance from the mapped factor (FᵀF): A cov Aᵀ held a pinned direction's round-off (1e-24 where FᵀF
+        # has 1e-37), and the pair was refused as no covariance and its factor
+        F = F @ self.d.A.T
+        return F.T @ F, F, rows @ self.Ainv
+
+
 # --------------------------------------------------------------------------------------------
 # CLS
 # --------------------------------------------------------------------------------------------
@@ -856,19 +911,28 @@ def cls_uncertainty(
     _check_meets(model, data, static)
     st = _process_structure(model)
     recs = records_of(data)
-    d = _dynamic(st, recs)
+    try:  # the points that tell a held input's terms apart, as cls reads them; refused below, after the records
+        sp = static_info(static, data, curves=True)
+    except (ValueError, TypeError):
+        sp = None
+    # the data and coordinates cls fits in: on the centred signals for a closed structure with centrable constraints
+    d = _data(st, recs, sp if isinstance(sp, StaticPoints) else None)
     cons, ctx, _ = _cls_setup(st, recs, d, data, static, how, reference, constraints)
-    A = _equalities(cons, ctx, model.theta, d.s, "cls_uncertainty", d.R1, d.N, d.y_scale)
+    if d.A is not None and not centrable(cons):
+        d = _dynamic(st, recs)
+    fc = _FitCoordinates(d, cons, ctx, model.theta)
+    A = _equalities(cons, fc.ctx, fc.theta, d.s, "cls_uncertainty", d.R1, d.N, d.y_scale, fc.affine, fc.round)
     n = len(st)
     Z, r = _null_space(A / d.s, n, _equality_rank(cons, ctx, A))
-    z = model.theta * d.s
+    z = fc.theta * d.s
     dof = d.N - (n - r)
     rss = float(np.sum((d.R1 @ z - d.c1) ** 2) + d.rss)
     sigma2 = rss / dof
     cov, F = _to_theta(_sandwich(Z, d.R1, np.sqrt(sigma2) * d.R1, "cls_uncertainty", d.N), d.s)
     _check_stationary(Z, d.R1, d.R1 @ z - d.c1, d.rss, _size(d.R1 @ z, d.c1), "cls_uncertainty",
                       "pass the CLS estimate with the data, static information and constraints it was estimated with",
-                      d.N, z=z)
+                      d.N, z=z, z_round=None if fc.round is None else fc.round * d.s)
+    cov, F, A = fc.back(cov, F, A)
     return ParameterUncertainty(model, cov, level, dof, sigma2, "CLS", A, np.zeros((0, 0)), cov_factor=F)
 
 
@@ -931,13 +995,17 @@ def pe_uncertainty(
     _check_meets(m, data, static)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", StaticRangeWarning)  # the estimator has said it
-        st, recs, d, pts, ctx, cons, rows, stat, M = _pe_setup(m, data, static, constraints, weights, ubar, reference)
+        # the data and coordinates pe_pareto fits in (on the centred signals for a closed structure, :class:`_FitCoordinates`)
+        st, recs, d, pts, ctx, cons, rows, stat, M = _pe_setup(m, data, static, constraints, weights, ubar, reference,
+                                                               centre=True)
     n = len(st)
-    theta = m.theta
+    fc = _FitCoordinates(d, cons, ctx, m.theta)
+    theta, pts = fc.theta, fc.points(pts)
     cm = static_cluster_map(st, recs[0].input_names)  # a surface's clusters for several inputs
     QR = static_rows(cm, pts.ubar, pts.ybar) @ cm.R / d.s  # (M, n) in z
     # the estimator's QP works in the basis that whitens the dynamic and static factors stacked
-    A = _equalities(cons, ctx, theta, d.s, "pe_uncertainty", np.vstack([d.R1, QR]), d.N + M, d.y_scale)
+    A = _equalities(cons, fc.ctx, theta, d.s, "pe_uncertainty", np.vstack([d.R1, QR]), d.N + M, d.y_scale, fc.affine,
+                    fc.round)
     Z, r = _null_space(A / d.s, n, _equality_rank(cons, ctx, A))
     w1 = lam / d.N if weights == "mse" else lam
     w2 = (1 - lam) / M if weights == "mse" else 1 - lam
@@ -952,7 +1020,8 @@ def pe_uncertainty(
     r2 = np.concatenate([np.sqrt(w1) * (d.R1 @ z - d.c1), np.sqrt(w2) * sres])
     _check_stationary(Z, A2, r2, w1 * d.rss, _size(A2 @ z, np.sqrt(w1) * d.c1, np.sqrt(w2) * pts.ybar),
                       "pe_uncertainty", f"pass the member's own λ1 (got {lam:g}) and the data, static "
-                      "points and constraints of its estimate", d.N + M, z=z)
+                      "points and constraints of its estimate", d.N + M, z=z,
+                      z_round=None if fc.round is None else fc.round * d.s)
     dof_ls = d.N - n
     sigma2 = d.rss / dof_ls  # the data's noise, from least squares on the same data
     B = sres[:, None] * dQR + g[:, None] * QR  # ∂(gradient of the static term)/∂ȳ_i, row i
@@ -965,6 +1034,7 @@ def pe_uncertainty(
         ss2 = misfit / _checked_dof(0.0 if exact else _static_misfit_dof(Z, A2, QR, w2 * B, g, d.N + M), M)
     G = np.vstack([w1 * np.sqrt(sigma2) * d.R1, w2 * np.sqrt(ss2) * B])  # M = GᵀG
     cov, F = _to_theta(_sandwich(Z, A2, G, "pe_uncertainty", d.N + M), d.s)
+    cov, F, A = fc.back(cov, F, A)
     return ParameterUncertainty(m, cov, level, d.N - (n - r), sigma2, f"PE λ1={lam:.4g}", A, np.zeros((0, 0)), ss2,
                                 cov_factor=F)
 
