@@ -122,3 +122,20 @@ def test_cls_uncertainty_is_the_same_at_an_offset_of_y(how):
     assert b.constraints.shape == a.constraints.shape
     np.testing.assert_allclose(b.std[_SAME], a.std[_SAME], rtol=1e-4, atol=0)
     assert b.sigma2 == pytest.approx(a.sigma2, rel=1e-4, abs=0)
+
+
+def test_se_dsf_names_the_same_start_at_an_offset_of_y():
+    # least squares and the fresh fit started from it end on one model, their J_S an ulp apart: the run the last bit
+    # favoured was named, 'least squares' at y and 'SE λ1=0.95 (fresh fit)' at y + 1e4
+    rng = np.random.default_rng(3)
+    u = np.repeat(rng.uniform(-1.0, 1.0, 41), 5)[:200]
+    m = gb.Model(_TRUE, _THETA)
+    y = m.simulate(u, np.zeros(2)) + 0.02 * rng.standard_normal(200)
+    yb = m.static_curve(_UB) + 0.05 * np.sin(3 * _UB + 3)
+    starts = []
+    for oy in (0.0, 1e4):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            starts.append(gb.se_dsf(_CLOSED, gb.Record(u, y + oy), gb.StaticPoints(_UB, yb + oy), band=0.002,
+                                    margin=None, lambdas=[0.5], pe_lambdas=[0.01, 0.1]).start)
+    assert starts[0] == starts[1] == "least squares"

@@ -562,7 +562,11 @@ def _solve_one_thread(problem: SEProblem, *, band, theta0, lambdas, max_iter, to
     if not inside:
         g_min = min(t[1][2] for t in runs)
         inside = [t for t in runs if t[1][2] <= g_min * (1 + _JSF_TIE)]
-    start, (th, f, g, f0, g0, it, message) = min(inside, key=lambda t: t[1][1])
+    # runs whose J_S are one within its rounding ended on one model (e.g. least squares and the fresh fit started from
+    # it): the first start of them is named, not the one the last bit favoured (which changed with the output's zero:
+    # 'least squares' at y, 'SE λ1=0.95 (fresh fit)' at y + 1e4, for the same model)
+    best = min(t[1][1] for t in inside)
+    start, (th, f, g, f0, g0, it, message) = next(t for t in inside if t[1][1] <= best * (1.0 + _ROUNDING))
     it = sum(r[5] for _, r in runs)
     # J_S and J_SF as the run computed them at its last z (the shared definitions, on the centred signals for a
     # centred problem: the same errors to round-off). Those of raw θ on the records as given carried the offsets'
