@@ -72,9 +72,9 @@ from ._residuals import _model_residuals
 from ..estimation._simulation_error import SEProblem
 from ..selection._centring import shift_map
 from ..estimation._extended_least_squares import _ma_coefficients, _pure_lags
-from ..static._analysis import one_input_levels, reached_equilibria
+from ..static._analysis import one_input_levels, reached_equilibria, static_theta_gradient
 from ..static._linearisation import static_gain_gradient, static_gains, static_powers, static_theta_gradient_of
-from ..static._surface_analysis import points_of_inputs, reached_surface, static_surface
+from ..static._surface_analysis import points_of_inputs, reached_surface, static_surface, surface_theta_gradient
 from ..core._reprs import share_text
 from ..core._validation import Relocked
 from ..core._validation import (check_count, check_band_finite, check_band_values, check_choice, check_fields, check_int,
@@ -1130,16 +1130,28 @@ def se_uncertainty(
     problem = SEProblem(m.structure, recs, sp)
     n, nd, M = len(m.structure), problem.n_dyn, len(sp)
     th = m.theta
-    # the weighted problem of eq. (13) in the solver's scaled coordinates z = θ · scale
+    # the weighted problem of eq. (13) in the solvers' coordinates z (SEProblem.to_z): θ · scale, or for a structure
+    # closed under shifts the centred parameters times their regressors' RMS, with the free runs and equilibria made
+    # on the centred signals as the fits make them. On the raw signals y(k-1)^2 at y + 2^18 carried the offset's
+    # powers: the std came out 0.6 % off, and at y + 2^20 the covariance was refused as "not identifiable"
+    z = problem.to_z(th)
+    th_run = problem.run_theta(th, z)
+    div = problem.scale if problem.run_scale is None else problem.run_scale  # ∂/∂z = ∂/∂θ_run / div
     w1, w2 = np.sqrt(lam / nd), np.sqrt((1 - lam) / M)
     with np.errstate(all="ignore"):
         # the free run's rows as the triangular factor T of [w1 ∂ŷ/∂z, w1 (ŷ − y)], streamed block by block as the
         # gradient sweep takes it: the N × n Jacobian is never held (its copies and SVDs held a dozen of them)
-        T = _free_run_factor(problem, th, w1)
+        T = _free_run_factor(problem, th_run, w1, div)
         if lam < 1:
-            yb = problem.static_outputs(th)[0]
-            rs = w2 * (yb - sp.ybar)
-            Js = w2 * problem.static_theta_gradient(th, yb) / problem.scale
+            e = problem.static_errors(th[None], z=z[None])[0]  # ȳ_model − ȳ, of the centred model where centred
+            points = sp if problem.static_run is None else problem.run_points()
+            yb = e + points.ybar
+            rs = w2 * e
+            if problem.surface_inputs is not None:
+                grad = surface_theta_gradient(problem.structure, th_run, points.ubar, yb, inputs=problem.surface_inputs)
+            else:
+                grad = static_theta_gradient(problem.structure, th_run, points.ubar, yb)
+            Js = w2 * grad / div
         else:
             rs, Js = np.zeros(0), np.zeros((0, n))
     if not (np.all(np.isfinite(T)) and np.all(np.isfinite(rs)) and np.all(np.isfinite(Js))):
@@ -1177,23 +1189,32 @@ def se_uncertainty(
     rel = g / max(nJ * np.sqrt(rd2 + float(rs @ rs)), 1e-300)
     # residuals at the round-off of the fit (1e-11 of the weighted targets, as _check_stationary allows) point
     # anywhere: a member that fits noise-free data exactly is the optimum, whatever its relative gradient
-    floor = 1e-11 * nJ * _size(w1 * problem.target, *([w2 * sp.ybar] if lam < 1 else []))
+    floor = 1e-11 * nJ * _size(w1 * problem.z_target, *([w2 * problem.run_points().ybar] if lam < 1 else []))
+    if problem.z_map is not None:  # and the residuals the last digits of θ make, mapped to z (θ carries the offsets)
+        dz = np.finfo(float).eps * (np.abs(problem.z_inv) @ (np.abs(th) + np.abs(problem.z_shift)))
+        floor += nJ * float(np.linalg.norm(np.abs(J) @ dz))
     if rel > 1e-3 and g > floor:
         warn(f"se_uncertainty: θ is not a stationary point of the SE objective at λ1 = {lam:g} (relative gradient "
              f"{rel:.1e}); the intervals describe the curvature at this θ, not at an optimum", UncertaintyWarning)
-    cov, F = _to_theta(_sandwich(np.eye(n), J, G, "se_uncertainty", rows), problem.scale)
+    cov_z, F = _sandwich(np.eye(n), J, G, "se_uncertainty", rows)
+    if problem.z_map is None:
+        cov, F = _to_theta((cov_z, F), problem.scale)
+    else:  # θ = z_map z + z_shift; the covariance from the mapped factor, as for CLS and PE (:class:`_FitCoordinates`)
+        F = F @ problem.z_map.T
+        cov = F.T @ F
     return ParameterUncertainty(m, cov, level, nd - n, sigma2, f"SE λ1={lam:.4g}", np.zeros((0, n)),
                                 np.zeros((0, 0)), ss2, cov_factor=F)
 
 
-def _free_run_factor(problem: SEProblem, theta: np.ndarray, w1: float) -> np.ndarray:
-    """The triangular factor T, shape (n + 1, n + 1), of [w1 ∂ŷ/∂z, w1 (ŷ − y)] over every record's free run
-    (z = θ · scale; TᵀT is that matrix's Gram matrix), by TSQR over blocks of the streamed sensitivities: memory
-    independent of the records' length. NaN where the run or its sensitivities are not finite."""
+def _free_run_factor(problem: SEProblem, theta: np.ndarray, w1: float, div: np.ndarray) -> np.ndarray:
+    """The triangular factor T, shape (n + 1, n + 1), of [w1 ∂ŷ/∂z, w1 (ŷ − y)] over every record's free run as the
+    fits make it (``theta`` the parameters of the runs on :attr:`SEProblem.run_records`, z = ``theta`` · ``div``;
+    TᵀT is that matrix's Gram matrix), by TSQR over blocks of the streamed sensitivities: memory independent of the
+    records' length. NaN where the run or its sensitivities are not finite."""
     n, L = theta.size, problem.L
-    colw = w1 / problem.scale
+    colw = w1 / div
     T = np.zeros((0, n + 1))
-    for rec, U in zip(problem.records, problem.U):
+    for rec, U in zip(problem.run_records, problem.run_U):
         for k0, k1, yh, S in free_run_sensitivity_blocks(problem.code, theta, U, rec.y[:L], L):
             work = np.empty((T.shape[0] + k1 - k0, n + 1))
             work[: T.shape[0]] = T
