@@ -155,3 +155,14 @@ def test_se_uncertainty_is_the_same_at_an_offset_of_y():
             np.testing.assert_allclose(b.std[_SAME], a.std[_SAME], rtol=1e-4, atol=0)
             assert b.sigma2 == pytest.approx(a.sigma2, rel=1e-4, abs=0)
             assert b.static_sigma2 == pytest.approx(a.static_sigma2, rel=1e-4, abs=0)
+
+
+
+def test_cls_names_the_regressor_that_overflows_at_the_offsets_of_a_closed_structure():
+    # the centring of a closed structure raised a bare OverflowError when the offsets' powers overflow (u ≈ 1e160 with
+    # u(k-1)^2); the raw regressors' check names the term
+    rng = np.random.default_rng(0)
+    u = rng.uniform(1.0, 3.0, 100)
+    y = u + 0.01 * rng.standard_normal(100)
+    with pytest.raises(ValueError, match=r"regressors overflow.*u\(k-1\)\^2"):
+        gb.cls(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"], gb.Record(u * 1e160, y))

@@ -405,7 +405,9 @@ def _data(structure: Structure, records: list, points: StaticPoints | None = Non
                 if n in held and ub.shape[1] == len(names):
                     off[n] = _held_level(ub[:, i], first[n])
         A, t = shift_map(structure, off)
-    except (ValueError, KeyError, IndexError):  # records that do not fit the structure: _dynamic says so
+    # records that do not fit the structure, or offsets whose powers overflow (u ≈ 1e160 with u(k-1)^2: a bare
+    # OverflowError from cls): _dynamic says so, naming the regressor
+    except (ValueError, KeyError, IndexError, OverflowError):
         return _dynamic(structure, records)
     d = _dynamic(structure, centred_dask(recs, off) if lazy else centred_data(recs, off, keep=held))
     return replace(d, A=A, t=t, offsets=off)
