@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import warnings
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -166,3 +167,27 @@ def test_cls_names_the_regressor_that_overflows_at_the_offsets_of_a_closed_struc
     y = u + 0.01 * rng.standard_normal(100)
     with pytest.raises(ValueError, match=r"regressors overflow.*u\(k-1\)\^2"):
         gb.cls(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"], gb.Record(u * 1e160, y))
+
+
+def test_ls_uncertainty_is_the_same_at_an_offset_of_y():
+    # on the raw signals y(k-1)^2 at y + 2^20 was refused as "not identifiable" (6e-5 off at y + 2^18), where els
+    # (which centres a closed structure) fits the same model at every offset
+    u, y, _ = _quadratic_plant()
+    m0 = gb.els(_QUADRATIC, gb.Record(u, y), noise=0).model
+    a = gb.ls_uncertainty(m0, gb.Record(u, y))
+    b = gb.ls_uncertainty(_at(m0, 2.0 ** 20), gb.Record(u, y + 2.0 ** 20))
+    np.testing.assert_allclose(b.std[_SAME], a.std[_SAME], rtol=1e-5, atol=0)
+    assert b.sigma2 == pytest.approx(a.sigma2, rel=1e-5, abs=0)
+
+
+def test_els_uncertainty_is_the_same_at_an_offset_of_y():
+    # the ELS path too built its regressors and residuals from the raw θ on the raw signals: refused as "not
+    # identifiable" at y + 2^20, 1.3e-4 off at y + 2^18
+    u, y, _ = _quadratic_plant()
+    m0 = gb.els(_QUADRATIC, gb.Record(u, y), noise=1).model
+    mo = replace(m0, theta=_at(m0, 2.0 ** 20).theta)  # e(k-1)'s coefficient is the same at any offset
+    a = gb.ls_uncertainty(m0, gb.Record(u, y))
+    b = gb.ls_uncertainty(mo, gb.Record(u, y + 2.0 ** 20))
+    np.testing.assert_allclose(b.std[_SAME], a.std[_SAME], rtol=1e-4, atol=0)
+    np.testing.assert_allclose(b.noise_std, a.noise_std, rtol=1e-4, atol=0)
+    assert b.sigma2 == pytest.approx(a.sigma2, rel=1e-4, abs=0)

@@ -47,7 +47,7 @@ Intervals use Student's t with the residual degrees of freedom.
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Iterable, Sequence
 
 import numpy as np
@@ -65,13 +65,13 @@ from ..models._coerce import as_model, records_of, static_info, static_points
 from ..models._model import Model
 from ..core._least_squares import check_rows, one_blas_thread, rank_tolerance
 from ..core._simulation_kernels import free_run_sensitivity_blocks, inverse_ma_filter
-from ..core._terms import check_input_names
+from ..core._terms import Structure, check_input_names
 from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, check_units, require_lengths
 from ..core._regressors import record_signals, refuse_non_finite_columns, regressor_columns, regressor_matrix
 from ._residuals import _model_residuals
 from ..estimation._simulation_error import SEProblem
-from ..selection._centring import shift_map
-from ..estimation._extended_least_squares import _ma_coefficients, _pure_lags
+from ..selection._centring import centred_data, raw_theta, shift_map
+from ..estimation._extended_least_squares import _ma_coefficients, _pure_lags, _shift_offsets
 from ..static._analysis import one_input_levels, reached_equilibria, static_theta_gradient
 from ..static._linearisation import static_gain_gradient, static_gains, static_powers, static_theta_gradient_of
 from ..static._surface_analysis import points_of_inputs, reached_surface, static_surface, surface_theta_gradient
@@ -690,17 +690,36 @@ def ls_uncertainty(
     what = "ls_uncertainty (ELS)"
     L = max(st.max_lag, ns.max_lag)
     require_lengths(recs, L)  # named, as the LS path names it (regressor_matrix's start = L named no record)
-    blocks, grads, targets = [], [], []
     for r in recs:
+        model.check_record(r)
+    # on the centred signals where els fits there (a closed model, :func:`_shift_offsets`), [θ; c] mapped to the
+    # centred parameters: on the raw ones y(k-1)^2 at y + 2^20 was refused as "not identifiable"
+    fit, recs_fit, Afull, z_round = model, recs, None, None
+    try:
+        offsets = _shift_offsets(st, ns, recs)
+        if offsets is not None:
+            both = Structure(list(st) + list(ns))
+            Afull, _ = _raw_map(both, offsets)
+            Ainv, tinv = _raw_map(both, {k: -v for k, v in offsets.items()})
+    except (ValueError, KeyError, IndexError, OverflowError):  # the raw regressors say what does not fit
+        offsets = Afull = None
+    if Afull is not None:
+        raw_all = np.concatenate([model.theta, model.noise_theta])
+        cen = Ainv @ raw_all + tinv
+        z_round = np.finfo(float).eps * (np.abs(Ainv) @ np.abs(raw_all) + np.abs(tinv))
+        fit = replace(model, theta=cen[:n], noise_theta=cen[n:], name="centred")
+        recs_fit = centred_data(recs, offsets)
+    blocks, grads, targets = [], [], []
+    for r in recs_fit:
         proc = regressor_columns(st, r.u, r.y, start=L, input_names=r.input_names)
         refuse_non_finite_columns(proc, st, f"{what}: ")
-        xi, _ = _model_residuals(model, r, True)
+        xi, _ = _model_residuals(fit, r, True)
         e = np.zeros(len(r))
         e[L:] = xi
         block = np.hstack([proc, regressor_matrix(ns, r.u, r.y, e=e, start=L, input_names=r.input_names)])
         del proc
         blocks.append(block)
-        grads.append(_residual_gradient(ns, model.noise_theta, block, r, e, L))
+        grads.append(_residual_gradient(ns, fit.noise_theta, block, r, e, L))
         targets.append(r.y[L:])
     # one N × (n + ne) array each for the regressors and the residuals' gradient, scaled in place: a long record's
     # ELS covariance held eight of them (stacked copies, scaled copies), twice what the estimate held
@@ -709,7 +728,7 @@ def ls_uncertainty(
     G = grads[0] if len(grads) == 1 else np.vstack(grads)
     del grads
     y = np.concatenate(targets)
-    theta_all = np.concatenate([model.theta, model.noise_theta])
+    theta_all = np.concatenate([fit.theta, fit.noise_theta])
     N = A.shape[0]
     check_rows(N, n + ne, f"{what}: ")
     s = np.sqrt(np.einsum("ij,ij->j", A, A) / N)
@@ -726,9 +745,20 @@ def ls_uncertainty(
     _check_stationary(np.eye(n + ne), A, -res, 0.0, _size(A @ (theta_all * s), y), what,
                       "pass the ELS estimate on these data, with its MA part (graybox.els(model.structure, "
                       "data); a run stopped at a loose tol, e.g. 0.1, is short of its fixed point too)",
-                      N, rtol=ELS_STATIONARY_RTOL)
+                      N, rtol=ELS_STATIONARY_RTOL, z_round=None if z_round is None else z_round * s)
+    if Afull is not None:  # back to the raw parameters, from the mapped factor (as _FitCoordinates.back)
+        F = F @ Afull.T
+        cov = F.T @ F
     return ParameterUncertainty(model, cov[:n, :n], level, dof, sigma2, "ELS", np.zeros((0, n)), cov[n:, n:],
                                 cov_factor=F[:, :n])
+
+
+def _raw_map(structure: Structure, offsets: dict) -> tuple[np.ndarray, np.ndarray]:
+    """``(A, t)`` with θ_raw = A θ_c + t for a model whose every term has its divisors (noise terms included, whose e
+    factors are never shifted): :func:`~graybox.selection._centring.shift_map` without its closure check."""
+    n = len(structure)
+    t = raw_theta(structure, np.zeros(n), offsets)
+    return np.column_stack([raw_theta(structure, e, offsets, level=False) for e in np.eye(n)]), t
 
 
 def _ls_uncertainty(model: Model, recs: list[Record], level: float) -> ParameterUncertainty:
@@ -738,16 +768,21 @@ def _ls_uncertainty(model: Model, recs: list[Record], level: float) -> Parameter
     st = _process_structure(model)
     n = len(st)
     what = "ls_uncertainty"
-    d = _dynamic(st, recs)
+    # on the centred signals for a closed structure, as the least squares of els and cls (:class:`_FitCoordinates`):
+    # on the raw ones y(k-1)^2 at y + 2^20 was refused as "not identifiable", and 6e-5 off at y + 2^18
+    d = _data(st, recs)
     check_rows(d.N, n, f"{what}: ")
-    z = model.theta * d.s
+    fc = _FitCoordinates(d, [], None, model.theta)
+    z = fc.theta * d.s
     dof = d.N - n
     sigma2 = float(np.sum((d.R1 @ z - d.c1) ** 2) + d.rss) / dof
     cov, F = _to_theta(_sandwich(np.eye(n), d.R1, np.sqrt(sigma2) * d.R1, what, d.N), d.s)
     _check_stationary(np.eye(n), d.R1, d.R1 @ z - d.c1, d.rss, _size(d.R1 @ z, d.c1), what,
                       "pass the least-squares estimate on these data (or use cls_/pe_/se_uncertainty); an ELS "
                       "estimate needs its MA part, which select_graybox's models leave out (a free run sets the "
-                      "noise to zero): refit it with graybox.els(model.structure, data)", d.N, z=z)
+                      "noise to zero): refit it with graybox.els(model.structure, data)", d.N, z=z,
+                      z_round=None if fc.round is None else fc.round * d.s)
+    cov, F, _ = fc.back(cov, F, np.zeros((0, n)))
     return ParameterUncertainty(model, cov, level, dof, sigma2, "LS", np.zeros((0, n)), np.zeros((0, 0)),
                                 cov_factor=F)
 
@@ -818,8 +853,11 @@ class _FitCoordinates:
         # θ as stored carries the offsets' powers: its last digits, mapped here, are this much of θ_c (the rounding
         # of the model the user holds, which the checks of θ̂ against its problem must allow)
         self.round = np.finfo(float).eps * (np.abs(self.Ainv) @ np.abs(theta) + np.abs(tinv))
-        self.ctx = _centred_context(ctx, d)
-        self.affine = lambda c: _centred_affine(c, ctx, self.ctx, d)
+        if ctx is None:  # no static information (least squares)
+            self.ctx, self.affine = None, None
+        else:
+            self.ctx = _centred_context(ctx, d)
+            self.affine = lambda c: _centred_affine(c, ctx, self.ctx, d)
 
     def points(self, pts: StaticPoints) -> StaticPoints:
         """The static points on the signals the fit ran on."""
