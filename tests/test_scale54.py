@@ -82,3 +82,4 @@ def test_els_refuses_a_parameter_beyond_the_float_range_in_the_users_units():
         warnings.simplefilter("error")
         with pytest.raises(ValueError, match=r"ELS: the parameter\(s\) of \['u\(k-1\)\^2'\] are beyond the float range"):
             gb.els(TERMS, gb.Record(u * 1e-200, y), noise=2)
+

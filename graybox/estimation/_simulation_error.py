@@ -1700,6 +1700,7 @@ def checkpoint_path(checkpoint: object) -> Path:
     checkpoint = check_path(checkpoint, "checkpoint")
     if not os.fspath(checkpoint):
         raise ValueError("checkpoint: an empty file name; give a file path such as 'front.npz'")
+    check_path(checkpoint, "checkpoint", file=True)  # 'ckpt/' (no such folder yet) was written as a file 'ckpt'
     path = Path(checkpoint)
     if path.suffix.lower() in _OTHER_FORMATS:  # a name promising another format, which the file would not be
         raise ValueError(f"checkpoint: {path} names a {_OTHER_FORMATS[path.suffix.lower()]}, but a checkpoint is an "
