@@ -16,7 +16,7 @@ from ._simulation_kernels import (BOUND_FACTOR, encode, predict_ahead, record_in
                                  simulate_one)
 from ._records import Dataset, Record, as_input_array, is_frame, record_hint, require_record
 from ._terms import check_input_names, default_input_names, require_inputs
-from ._validation import as_1d_finite, check_choice, check_int, check_real, check_theta, real_array
+from ._validation import as_1d_finite, check_choice, check_finite_rows, check_int, check_real, check_theta, real_array
 from ._regressors import regressor_columns
 from ._terms import Structure, structure_of
 
@@ -223,6 +223,7 @@ def simulate_many(
     structure : Structure, sequence of str, or a model
         Process terms (a model, or a result with ``.structure``, gives its own).
     thetas : ndarray, shape (P, n_terms)
+        Finite: a row with a NaN or inf is no model, and is refused naming it (``ValueError``).
     record : Record
         Input and initial outputs (its first ``max_lag`` samples).
     threads : int
@@ -240,6 +241,7 @@ def simulate_many(
     th = real_array(thetas, "thetas", "parameter vectors (numbers), shape (P, n_terms)")
     if th.ndim != 2 or th.shape[1] != len(structure):
         raise ValueError(f"thetas must have shape (P, {len(structure)}), got {th.shape}")
+    check_finite_rows(th, "thetas")  # a NaN θ is no model: its run was all NaN, as if it diverged
     L = structure.max_lag
     record.require_length(L)
     code = encode(structure)

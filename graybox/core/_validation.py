@@ -489,6 +489,17 @@ def check_theta(n_terms: int, theta: object, name: str = "theta") -> np.ndarray:
     return th
 
 
+def check_finite_rows(th: np.ndarray, name: str = "thetas") -> None:
+    """``ValueError`` naming the rows of the parameter vectors ``th`` (P, n_terms) that are not finite (NaN or
+    inf): such a θ is no model to run or score (a caller with failed members leaves them out)."""
+    bad = np.flatnonzero(~np.all(np.isfinite(th), axis=1))
+    if bad.size:
+        rows = bad[:10].tolist()
+        raise ValueError(f"{name}: row{'s' if bad.size > 1 else ''} {rows}{' …' if bad.size > 10 else ''} "
+                         f"({bad.size} of {th.shape[0]}) not finite (NaN or inf): such a θ is no model to run or "
+                         "score; leave failed members out")
+
+
 def check_lambdas(lambdas: Sequence[float] | np.ndarray | float, name: str = "lambdas") -> np.ndarray:
     """λ1 values of a weighted-sum sweep as a non-empty 1-D float array in (0, 1], shape (K,).
 

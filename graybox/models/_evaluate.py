@@ -31,8 +31,8 @@ from ._coerce import as_model, as_record, as_structure, static_info
 from ..core._regressors import regressor_columns
 from ..core._records import Dataset, Record, StaticPoints, static_point_inputs
 from ..core._simulation import DivergenceError
-from ..core._validation import (as_1d_finite, check_bool, check_int, check_per_point, check_sequence, real_array,
-                                warn)
+from ..core._validation import (as_1d_finite, check_bool, check_finite_rows, check_int, check_per_point, check_sequence,
+                                real_array, warn)
 from ..static._analysis import reached_equilibria
 from ..static._surface_analysis import reached_surface
 from ..core._terms import Structure
@@ -302,12 +302,7 @@ def evaluate_thetas(
     if th.ndim != 2 or th.shape[1] != len(structure):
         raise ValueError(f"thetas must have shape (P, {len(structure)}) (one parameter vector per row, one value per "
                          f"term) or ({len(structure)},), got shape {np.shape(thetas)}")
-    bad = np.flatnonzero(~np.all(np.isfinite(th), axis=1))
-    if bad.size:
-        rows = bad[:10].tolist()
-        raise ValueError(f"thetas: row{'s' if bad.size > 1 else ''} {rows}{' …' if bad.size > 10 else ''} "
-                         f"({bad.size} of {th.shape[0]}) not finite (NaN or inf): such a θ is no model to score; "
-                         "leave failed members out")
+    check_finite_rows(th, "thetas")
     out: dict[str, np.ndarray] = {}
     if record is not None:
         L = structure.max_lag

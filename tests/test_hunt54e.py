@@ -1,0 +1,17 @@
+"""hunt54e: statics and free runs (what hunt48b did not try)."""
+
+import numpy as np
+import pytest
+
+import graybox as gb
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_simulate_many_refuses_a_non_finite_theta_row_naming_it(bad):
+    # simulate_many ran a NaN (or inf) θ and returned its run as NaN from the first sample on, as if the member had
+    # diverged, where evaluate_thetas refuses the same row as no model: one rule, the rows named
+    rec = gb.Record(np.linspace(0.0, 1.0, 20), np.linspace(0.0, 2.0, 20))
+    st = ["y(k-1)", "u(k-1)"]
+    with pytest.raises(ValueError, match=r"thetas: row \[1\] \(1 of 2\) not finite"):
+        gb.simulate_many(st, [[0.5, 1.0], [bad, 1.0]], rec)
+    assert np.isfinite(gb.simulate_many(st, [[0.5, 1.0], [0.4, 1.0]], rec)).all()
