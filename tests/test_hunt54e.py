@@ -15,3 +15,17 @@ def test_simulate_many_refuses_a_non_finite_theta_row_naming_it(bad):
     with pytest.raises(ValueError, match=r"thetas: row \[1\] \(1 of 2\) not finite"):
         gb.simulate_many(st, [[0.5, 1.0], [bad, 1.0]], rec)
     assert np.isfinite(gb.simulate_many(st, [[0.5, 1.0], [0.4, 1.0]], rec)).all()
+
+
+@pytest.mark.parametrize("box, kind, match", [
+    ([("0", "10"), (1.0, 2.0)], TypeError, r"ubar_range of input 1 must be a real number, got '0'"),
+    ([(0.0, 10.0), (False, True)], TypeError, r"ubar_range of input 2 must be a real number, got False"),
+    ([(0.0, 10.0), 5.0], TypeError, r"ubar_range of input 2 must be \(low, high\)"),
+    ([(0.0, 10.0), (1.0, 2.0, 3.0)], ValueError, r"one \(low, high\) per input"),
+])
+def test_gain_bounds_box_refuses_ends_that_are_no_numbers(box, kind, match):
+    # a range per input read each end with float(): "10" was parsed and True read as 1 (the box ((0, 10), (0, 1))
+    # built), where the one-input pair and the ranges by name refuse them naming the input
+    with pytest.raises(kind, match=match):
+        gb.GainBounds(lower=0.0, ubar_range=box)
+    assert gb.GainBounds(lower=0.0, ubar_range=[(0, 10), (1.0, 2.0)]).ubar_range == ((0.0, 10.0), (1.0, 2.0))

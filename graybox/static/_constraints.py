@@ -1052,10 +1052,12 @@ class GainBounds(StaticConstraint):
             else:
                 box = []
                 for j, pair in enumerate(rng):
-                    try:
-                        lo, hi = (float(v) for v in pair)
-                    except (TypeError, ValueError):
-                        raise ValueError(f"ubar_range must be (low, high) or one (low, high) per input, got {rng!r}") from None
+                    # each end a number, as the one-input pair's and the named ranges' are (float() parsed "10" and
+                    # read True as 1)
+                    pair = check_sequence(pair, f"GainBounds: ubar_range of input {j + 1}", "(low, high)")
+                    if len(pair) != 2:
+                        raise ValueError(f"ubar_range must be (low, high) or one (low, high) per input, got {rng!r}")
+                    lo, hi = (check_real(v, f"GainBounds: ubar_range of input {j + 1}") for v in pair)
                     if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi):
                         raise ValueError(f"ubar_range of input {j + 1} must be (low, high) with low <= high, got {pair}")
                     box.append((lo, hi))
