@@ -29,3 +29,17 @@ def test_gain_bounds_box_refuses_ends_that_are_no_numbers(box, kind, match):
     with pytest.raises(kind, match=match):
         gb.GainBounds(lower=0.0, ubar_range=box)
     assert gb.GainBounds(lower=0.0, ubar_range=[(0, 10), (1.0, 2.0)]).ubar_range == ((0.0, 10.0), (1.0, 2.0))
+
+
+def test_static_messages_tell_offset_input_levels_apart():
+    # the static surface's "several stable equilibria" named both points ū = (10000, 10000), and equilibria's
+    # continuum refusal said ū = 10000 of the level 10000.01 (%g's six digits): the static curve tells them apart
+    bistable = gb.Model(["y(k-1)", "y(k-1)^3", "a(k-1)", "b(k-1)"], [1.5, -0.5, 1e-9, -1e-9], input_names=("a", "b"))
+    U = np.array([[10000.01, 10000.0], [10000.02, 10000.0]])
+    with pytest.raises(ValueError, match=r"ū = \(10000\.01, 10000\) .*ū = \(10000\.02, 10000\) "):
+        bistable.static_curve(U)
+    integrator = gb.Model(["y(k-1)", "a(k-1)", "b(k-1)"], [1.0, 1.0, -1.0], input_names=("a", "b"))
+    with pytest.raises(ValueError, match=r"^ū = \(10000\.01, 10000\.01\): a continuum"):
+        integrator.equilibria([10000.01, 10000.01])
+    with pytest.raises(ValueError, match=r"^ū = 10000\.01: a continuum"):
+        gb.equilibria(["y(k-1)", "u(k-1)"], [1.0, 0.0], 10000.01)

@@ -67,10 +67,9 @@ from ._equilibrium_kernels import (
     settle_runs,
 )
 from ..core._terms import Structure, Term, structure_of
-from ..core._validation import Relocked
-from ..core._validation import (as_1d_finite, check_bool, check_fields, check_per_point, check_real,
+from ..core._validation import (Relocked, as_1d_finite, check_bool, check_fields, check_per_point, check_real,
                                 check_theta, locked, real_array)
-from ..core._reprs import LISTED, point_texts, short_repr
+from ..core._reprs import LISTED, exact_text, point_texts, short_repr
 from ._linearisation import (characteristic_roots, derivative_map, grid_coefficients, static_gains, static_powers,
                              static_theta_gradient_of)
 
@@ -732,7 +731,7 @@ def equilibria(structure: Structure, theta: np.ndarray, ubar: float) -> list[Equ
         raise ValueError(f"the structure has {len(structure.input_names)} inputs {structure.input_names}: its equilibria lie on "
                          "a surface; use graybox.surface_equilibria(structure, theta, ū) with ū of shape (m,)")
     ub = check_real(ubar, "ubar (one input level)")
-    refuse_continuum(structure, theta, ub, f"{ub:g}")
+    refuse_continuum(structure, theta, ub, exact_text(ub))  # the level given: 10000.01 was said '10000'
     return folded_equilibria(structure, theta, ub)
 
 

@@ -39,7 +39,7 @@ from ..core._transient import steady_levels
 from ..core._validation import Relocked
 from ..core._validation import check_bool, check_fields, check_per_point, frozen, real_array
 from ..core._renamed import RenamedAttribute
-from ..core._reprs import short_repr
+from ..core._reprs import exact_text, point_texts, short_repr
 
 __all__ = [
     "SurfaceClusterMap",
@@ -267,7 +267,7 @@ def surface_equilibria(structure: Structure, theta: np.ndarray, ubar: np.ndarray
         raise ValueError(f"ubar must be one point of shape ({len(names)},), got shape {np.shape(ubar)}")
     sk, th = _folded(structure, theta, ub, names)
     point = tuple(float(v) for v in ub[0])
-    _static.refuse_continuum(sk, th[0, 0], 1.0, "(" + ", ".join(f"{v:g}" for v in point) + ")")
+    _static.refuse_continuum(sk, th[0, 0], 1.0, "(" + ", ".join(map(exact_text, point)) + ")")
     return [Equilibrium(point, e.ybar, e.stable, e.spectral_radius)
             for e in _static.folded_equilibria(sk, th[0, 0], 1.0)]
 
@@ -359,7 +359,7 @@ def static_surface(
     roots, stab = _static.roots_and_stability(sk, thf[0], np.ones(1))  # (M, 1, D) each
     stab = stab[:, 0]
     out, problems = _static.only_stable(roots[:, 0, :], stab,
-                                        ["ū = (" + ", ".join(f"{v:g}" for v in u) + ")" for u in ub],
+                                        [f"ū = {p}" for p in point_texts(ub)],  # told apart (10000.01, .02)
                                         _static.continuum(sk, thf[0], np.ones(1))[:, 0])
     if strict and problems:
         raise ValueError("the static surface is undefined: the model has " + _static.point_phrases(problems))
