@@ -43,3 +43,19 @@ def test_static_messages_tell_offset_input_levels_apart():
         integrator.equilibria([10000.01, 10000.01])
     with pytest.raises(ValueError, match=r"^ū = 10000\.01: a continuum"):
         gb.equilibria(["y(k-1)", "u(k-1)"], [1.0, 0.0], 10000.01)
+
+
+def test_domain_refusals_tell_the_domain_ends_apart():
+    # "ū = [10000.0] outside the domain [10000, 10000]": the ends of a narrow domain far from zero printed alike
+    # (%g), and the refused level seemed to lie on them; a fit to one level said ū = 10000 of 10000.01
+    c = gb.StaticCurve.fit(gb.StaticPoints([10000.01, 10000.03, 10000.05], [1.0, 2.0, 3.5]), 2)
+    with pytest.raises(ValueError, match=r"ū = \[10000\.0\] outside the domain \[10000\.01, 10000\.05\]"):
+        c(10000.0)
+    U = np.array([[10000.01, 1.0], [10000.03, 2.0], [10000.05, 1.0], [10000.02, 2.0]])
+    s = gb.StaticSurface.fit(gb.StaticPoints(U, [1.0, 2.0, 3.0, 4.0], input_names=("a", "b")), 1)
+    with pytest.raises(ValueError, match=r"a = \[10000\.06\] outside the domain \[10000\.01, 10000\.05\]"):
+        s([[10000.06, 1.5]])
+    with pytest.raises(ValueError, match=r"one level \(ū = 10000\.01\)"):
+        gb.StaticCurve.fit(gb.StaticPoints([10000.01], [1.0]), 1)
+    with pytest.raises(ValueError, match=r"outside the domain \[0\.6, 1\.8\]"):  # as before where %g tells them
+        gb.StaticCurve.polynomial([1.0], domain=(0.6, 1.8))(2.0)

@@ -8,9 +8,8 @@ import numpy as np
 
 from ..core._least_squares import scaled_lstsq
 from ..core._records import StaticPoints, outside_range
-from ..core._validation import Relocked
-from ..core._validation import as_1d_finite, check_int, check_real, check_str, locked, real_array
-from ..core._reprs import listed, short_repr
+from ..core._validation import Relocked, as_1d_finite, check_int, check_real, check_str, locked, real_array
+from ..core._reprs import exact_text, level_texts, listed, short_repr
 
 __all__ = ["StaticCurve", "fit_on_powers"]
 
@@ -69,7 +68,7 @@ class StaticCurve(Relocked):
                              "is of one input (fit a surface: StaticSurface.fit)")
         degree = check_int(degree, "degree", low=0)
         if len(points) == 1:  # a curve is known over the points' range: one level has none
-            raise ValueError(f"StaticCurve.fit: {points.name} is one level (ū = {points.ubar[0]:g}); a fitted curve "
+            raise ValueError(f"StaticCurve.fit: {points.name} is one level (ū = {exact_text(points.ubar[0])}); a fitted curve "
                              "needs points at two levels or more (its domain is their range)")
         if len(points) < degree + 1:
             raise ValueError(f"fitting degree {degree} needs at least {degree + 1} static points, got {len(points)}")
@@ -90,7 +89,9 @@ class StaticCurve(Relocked):
         ub = np.atleast_1d(ubar)
         out = ub[outside_range(ub, lo, hi)]
         if out.size:
-            raise ValueError(f"ū = {listed(out.tolist())} outside the domain [{lo:g}, {hi:g}] of {self.name}")
+            # the ends told apart ([10000.01, 10000.05] read [10000, 10000], and ū = 10000.0 lay "outside" it)
+            raise ValueError("ū = {} outside the domain [{}, {}] of {}".format(listed(out.tolist()), *level_texts([lo, hi]),
+                                                                            self.name))
 
     def __call__(self, ubar: np.ndarray) -> np.ndarray:
         """H(ū), same shape as ``ubar`` (finite, checked against the domain)."""

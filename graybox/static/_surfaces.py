@@ -16,9 +16,9 @@ import numpy as np
 from ..core._least_squares import scaled_lstsq
 from ..core._records import StaticPoints, frame_inputs, outside_range
 from ..core._terms import check_input_names
-from ..core._validation import Relocked
-from ..core._validation import as_1d_finite, check_int, check_real, check_sequence, check_str, locked, real_array
-from ..core._reprs import listed, short_repr
+from ..core._validation import (Relocked, as_1d_finite, check_int, check_real, check_sequence, check_str, locked,
+                                real_array)
+from ..core._reprs import level_texts, listed, short_repr
 
 __all__ = ["StaticSurface", "monomial_exponents", "box_grid"]
 
@@ -304,8 +304,8 @@ class StaticSurface(Relocked):
             col = u[:, i]
             out = col[outside_range(col, lo, hi)]
             if out.size:
-                raise ValueError(f"{self.input_names[i]} = {listed(out.tolist())} outside the domain [{lo:g}, {hi:g}] of "
-                                 f"{self.name}")
+                raise ValueError("{} = {} outside the domain [{}, {}] of {}".format(  # ends told apart, as a curve's
+                    self.input_names[i], listed(out.tolist()), *level_texts([lo, hi]), self.name))
 
     def __call__(self, ubar: np.ndarray) -> np.ndarray:
         """H(ū) at points ``ubar`` of shape (K, m) (or (m,) for one point); returns shape (K,)."""
