@@ -59,3 +59,13 @@ def test_domain_refusals_tell_the_domain_ends_apart():
         gb.StaticCurve.fit(gb.StaticPoints([10000.01], [1.0]), 1)
     with pytest.raises(ValueError, match=r"outside the domain \[0\.6, 1\.8\]"):  # as before where %g tells them
         gb.StaticCurve.polynomial([1.0], domain=(0.6, 1.8))(2.0)
+
+
+def test_a_diverging_settling_run_names_its_start_as_given():
+    # "the free run from y0 = 10005 diverged" of the run started at 10005.01 (%g), an output 1e4 from its zero:
+    # y(k) = 0.5 y + 0.1 y² + u written in y' = y + 1e4, whose unstable equilibrium at ū = 0 is y' = 10005
+    c = 1e4
+    m = gb.Model(["1", "y(k-1)", "y(k-1)^2", "u(k-1)"], [c - 0.5 * c + 0.1 * c * c, 0.5 - 0.2 * c, 0.1, 1.0])
+    with pytest.raises(ValueError, match=r"ū = 0: the free run from y0 = 10005\.01 diverged"):
+        m.static_curve([0.0], y0=c + 5.01)
+    assert m.static_curve([0.0], y0=c + 4.9)[0] == pytest.approx(c, abs=1e-6)  # the stable one, y' = 1e4

@@ -949,11 +949,11 @@ class Reached:
             elif s == NONE_STABLE:
                 why = "no stable equilibrium"
             elif s == DIVERGED:
-                why = f"the free run from y0 = {y0:g} diverged"
+                why = f"the free run from y0 = {exact_text(y0)} diverged"  # as given: 10005.01 read '10005'
             elif s == SKIPPED:
                 why = "not evaluated (another point is not reached)"
             else:
-                why = (f"the free run from y0 = {y0:g} did not settle on a stable equilibrium within "
+                why = (f"the free run from y0 = {exact_text(y0)} did not settle on a stable equilibrium within "
                        f"{SETTLE_STEPS} steps, nor within {SETTLE_TAUS} time constants of the slowest (one over "
                        f"{SETTLE_MAX_STEPS // SETTLE_TAUS} samples is not run)")
             out.append(f"ū = {points[j]}: {why}")
