@@ -69,3 +69,31 @@ def test_a_diverging_settling_run_names_its_start_as_given():
     with pytest.raises(ValueError, match=r"ū = 0: the free run from y0 = 10005\.01 diverged"):
         m.static_curve([0.0], y0=c + 5.01)
     assert m.static_curve([0.0], y0=c + 4.9)[0] == pytest.approx(c, abs=1e-6)  # the stable one, y' = 1e4
+
+
+def _heater():
+    """Two time constants, 1 h and 30 min, sampled at 1 s; static gain 0.5 °C per %: D = 1 − a1 − a2 = 1.5e-7, so
+    the steady output (25 °C at 50 %) is 6.5e6 times the input's direct push b u."""
+    a1, a2 = np.exp(-1 / 3600), np.exp(-1 / 1800)
+    d = (1 - a1) * (1 - a2)
+    return gb.Model(["y(k-1)", "y(k-2)", "u(k-1)"], [a1 + a2, -a1 * a2, 0.5 * d])
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_a_stable_slow_plant_run_from_rest_is_not_divergence(threads):
+    # the default bound was 1e6 × the push b u: the heater's free run from 0 °C passed it at sample 1797 (3.9 °C)
+    # on its way to 25 °C: DivergenceError, J_S = inf for the exact model, NaN in simulate_many; the push now
+    # counts at the level it holds the output at through the linear feedback (b u / D)
+    m = _heater()
+    u = np.full(3000, 50.0)
+    y = m.simulate(u, [0.0, 0.0])
+    assert np.isfinite(y).all() and 4.0 < y[-1] < m.static_curve([50.0])[0] == pytest.approx(25.0)
+    rec = gb.Record(u, y)
+    assert gb.js(m, rec) == 0.0
+    assert np.array_equal(m.predict(rec, horizon=len(rec)), y)
+    thetas = np.vstack([m.theta] * 4)
+    np.testing.assert_allclose(gb.simulate_many(m, thetas, rec, threads=threads), np.vstack([y] * 4), rtol=1e-9)
+    assert np.all(gb.evaluate_thetas(m, thetas, rec, threads=threads)["JS"] < 1e-12)
+    # made unstable (a pole at 1.0005), the same plant from rest is still caught running off
+    with pytest.raises(gb.DivergenceError):
+        gb.Model(m.structure, [m.theta[0] + 1e-3, m.theta[1], m.theta[2]]).simulate(np.full(20000, 50.0), [0.0, 0.0])

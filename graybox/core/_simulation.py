@@ -171,10 +171,12 @@ def simulate(
         or return NaN from that sample on.
     bound : float, optional
         Divergence bound on |y|, output units. Default: at each sample k, 1e6 × the largest of
-        max|y0|, max_j≤k |X(j)|, X the sum of the terms without y (the inputs' direct push on
-        the output, and the constant), and the size at which the model's nonlinear output
-        feedback matters (a limit cycle's scale), so it does not depend on the output's units,
-        also for a run from rest (y0 = 0).
+        max|y0|, G · max_j≤k |X(j)|, X the sum of the terms without y (the inputs' direct push on
+        the output, and the constant) and G the steady gain of the linear output feedback
+        (1 / (1 − Σ θ of the terms θ y(k−l)) where that lies in (0, 1), else 1: the level a
+        constant push holds a stable slow plant at), and the size at which the model's nonlinear
+        output feedback matters (a limit cycle's scale), so it does not depend on the output's
+        units, also for a run from rest (y0 = 0).
     input_names : tuple of str, optional
         Names of the columns of an array ``u`` (default ``"u"`` for 1-D, ``u1 … um`` for
         (N, m)); ignored for a Record, which names its inputs.
@@ -203,8 +205,9 @@ def simulate(
     y = simulate_one(code, th, uu, y0, L, b)
     if on_diverge == "raise" and not np.isfinite(y[-1]):
         k = int(np.flatnonzero(~np.isfinite(y))[0])
-        limit = f"{b:g}" if b is not None else (f"{BOUND_FACTOR:g} × the run's own scale: its initial outputs, the inputs' "
-                                                 "direct push so far and the model's output feedback")
+        limit = f"{b:g}" if b is not None else (f"{BOUND_FACTOR:g} × the run's own scale: its initial outputs, the level "
+                                                 "the inputs' direct push so far holds it at and the model's output "
+                                                 "feedback")
         raise DivergenceError(f"free run diverged at sample {k} (|y| > {limit}): the model is unstable along this input")
     return y
 

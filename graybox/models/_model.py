@@ -166,8 +166,9 @@ class Model(Relocked):
         with an array). ``on_diverge``: when the output leaves the bound, ``"raise"`` (default) a
         :class:`~graybox.DivergenceError` naming the sample, or ``"nan"`` NaN from that sample on.
         ``bound`` (output units) is the divergence bound on |y| (default: 1e6 × the largest of
-        max|y0|, the inputs' direct push on the output so far and the size at which the model's
-        nonlinear output feedback matters, in the output's units whatever they are, also from rest).
+        max|y0|, the level the inputs' direct push on the output so far holds it at through the
+        linear feedback, and the size at which the model's nonlinear output feedback matters, in the
+        output's units whatever they are, also from rest).
         """
         if isinstance(u, Record):
             self.check_record(u)
