@@ -97,3 +97,20 @@ def test_a_stable_slow_plant_run_from_rest_is_not_divergence(threads):
     # made unstable (a pole at 1.0005), the same plant from rest is still caught running off
     with pytest.raises(gb.DivergenceError):
         gb.Model(m.structure, [m.theta[0] + 1e-3, m.theta[1], m.theta[2]]).simulate(np.full(20000, 50.0), [0.0, 0.0])
+
+
+def test_static_points_holding_an_input_the_model_does_not_use_are_read_by_name():
+    # a model of one input ('speed') on data of two ('speed', 'valve'): j1 and js take the records' speed by name,
+    # evaluate_thetas scored J_SF at the points' speed, but jsf (and so evaluate's table) refused the points:
+    # "2 input columns ('speed', 'valve'), but the model has one input ('speed',)"
+    m = gb.Model(["y(k-1)", "speed(k-1)"], [0.5, 1.0])
+    u = np.c_[np.linspace(1.0, 2.0, 30), np.linspace(0.0, 3.0, 30)]
+    rec = gb.Record(u, np.linspace(1.0, 4.0, 30), input_names=("speed", "valve"))
+    sp = gb.StaticPoints([[1.0, 0.0], [2.0, 3.0]], [2.0, 4.1], input_names=("speed", "valve"))
+    assert gb.jsf(m, sp) == pytest.approx(0.005)
+    assert gb.evaluate_thetas(m, m.theta, rec, sp)["JSF"][0] == pytest.approx(0.005)
+    table = gb.evaluate({"m": m}, gb.Dataset(rec, rec, sp))
+    assert table.loc["m", "JSF"] == pytest.approx(0.005) and table.loc["m", "JS_valid"] == gb.js(m, rec)
+    other = gb.Model(["y(k-1)", "flow(k-1)"], [0.5, 1.0])  # an input the points do not have: still refused
+    with pytest.raises(ValueError, match="2 input columns"):
+        gb.jsf(other, sp)

@@ -456,10 +456,13 @@ def _uncertainty(value: object, n: int, name: str, each: str) -> np.ndarray:
 def static_point_inputs(static: StaticPoints, inputs: tuple[str, ...]) -> np.ndarray:
     """The static points' ū in the column order ``inputs``: shape (M,) for one input, (M, k) for several.
 
-    One input: any single-input points (whatever their input's name, as before several inputs).
-    Several: the columns are taken by name; ``ValueError`` naming a missing input or a count mismatch.
+    One input: any single-input points (whatever their input's name, as before several inputs), or the column of
+    that name among several (as a record's input is taken by name: points that also hold an input the model does
+    not use). Several: the columns are taken by name; ``ValueError`` naming a missing input or a count mismatch.
     """
     if len(inputs) <= 1:
+        if static.n_inputs != 1 and len(inputs) == 1 and inputs[0] in static.input_names:
+            return np.ascontiguousarray(static.ubar[:, static.input_names.index(inputs[0])])
         if static.n_inputs != 1:
             raise ValueError(f"{static.name}: {static.n_inputs} input columns {static.input_names}, but the model has "
                              f"one input {tuple(inputs)}")
