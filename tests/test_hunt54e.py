@@ -114,3 +114,19 @@ def test_static_points_holding_an_input_the_model_does_not_use_are_read_by_name(
     other = gb.Model(["y(k-1)", "flow(k-1)"], [0.5, 1.0])  # an input the points do not have: still refused
     with pytest.raises(ValueError, match="2 input columns"):
         gb.jsf(other, sp)
+
+
+def test_a_model_given_as_the_structure_reads_its_points_in_its_own_input_order():
+    # gb.static_surface(model, θ, ū) read ū's columns in the structure's order (a, b), not the model's (b, a): 402
+    # where model.static_curve says 204 (the levels of a and b swapped, silently); gb.simulate(model, θ, u) refused
+    # the model's own array as of inputs ('u1', 'u2')
+    m = gb.Model(["y(k-1)", "a(k-1)", "b(k-1)"], [0.5, 1.0, 100.0], input_names=("b", "a"))
+    pt = [[1.0, 2.0]]  # b = 1, a = 2
+    assert gb.static_surface(m, m.theta, pt).tolist() == m.static_curve(pt).tolist() == [204.0]
+    assert gb.static_surface_gain(m, m.theta, pt).tolist() == m.static_gain(pt).tolist() == [[200.0, 2.0]]
+    assert [e.ybar for e in gb.surface_equilibria(m, m.theta, pt[0])] == [e.ybar for e in m.equilibria(pt[0])] == [204.0]
+    u = np.tile(pt[0], (5, 1))
+    assert np.array_equal(gb.simulate(m, m.theta, u, [0.0]), m.simulate(u, [0.0]))
+    # a Structure (no order of its own) still reads the structure's inputs' order, and input_names= overrides
+    assert gb.static_surface(m.structure, m.theta, pt).tolist() == [402.0]
+    assert gb.static_surface(m, m.theta, pt, input_names=("a", "b")).tolist() == [402.0]

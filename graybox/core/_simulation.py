@@ -15,7 +15,7 @@ import numpy as np
 from ._simulation_kernels import (BOUND_FACTOR, encode, predict_ahead, record_inputs, scaled_bound, simulate_batch,
                                  simulate_one)
 from ._records import Dataset, Record, as_input_array, is_frame, record_hint, require_record
-from ._terms import check_input_names, default_input_names, require_inputs
+from ._terms import carried_input_names, check_input_names, default_input_names, require_inputs
 from ._validation import as_1d_finite, check_choice, check_finite_rows, check_int, check_real, check_theta, real_array
 from ._regressors import regressor_columns
 from ._terms import Structure, structure_of
@@ -178,13 +178,16 @@ def simulate(
         output feedback matters (a limit cycle's scale), so it does not depend on the output's
         units, also for a run from rest (y0 = 0).
     input_names : tuple of str, optional
-        Names of the columns of an array ``u`` (default ``"u"`` for 1-D, ``u1 … um`` for
-        (N, m)); ignored for a Record, which names its inputs.
+        Names of the columns of an array ``u`` (default: a model's own ``input_names``, else ``"u"``
+        for 1-D, ``u1 … um`` for (N, m)); ignored for a Record, which names its inputs.
 
     Returns
     -------
     ndarray, shape (N,)
     """
+    carried = carried_input_names(structure)
+    if input_names is None and carried is not None and len(carried) > 1:
+        input_names = carried  # a model's array is read in its own column order, as Model.simulate reads it
     structure = structure_of(structure)
     th = check_theta(len(structure), theta)
     check_choice(on_diverge, "on_diverge", ("raise", "nan"))

@@ -24,7 +24,7 @@ from ._renamed import RenamedAttribute
 from ._validation import check_bool, check_int, check_ordered, check_real, check_sequence
 
 __all__ = ["Term", "Structure", "Candidates", "parse_term", "parse_structure", "SIGNALS", "check_input_names",
-           "default_input_names", "require_inputs", "transient_name", "transient_source"]
+           "default_input_names", "require_inputs", "transient_name", "transient_source", "carried_input_names"]
 
 #: The signals of a single-input model, in printing order (the paper writes u before y). Any
 #: other identifier except ``y``, ``e`` and ``k`` is accepted as the name of a further input.
@@ -508,6 +508,17 @@ def structure_of(obj: object, name: str = "structure") -> Structure:
         return Structure(obj)
     except TypeError as exc:  # an item that is no term (a number, None): said with the argument's name
         raise TypeError(f"{name}: {exc}") from None
+
+
+def carried_input_names(obj: object) -> tuple[str, ...] | None:
+    """The input names, in its input arrays' column order, of what carries a structure (a Model, or a result whose
+    ``.model`` is one): given where :func:`structure_of` takes its structure, a model's arrays of ū and u are read in
+    its own order, as its methods read them. None for a Structure or terms (their callers' default order)."""
+    for holder in (obj, getattr(obj, "model", None)):
+        names = getattr(holder, "input_names", None)
+        if isinstance(names, tuple) and isinstance(getattr(holder, "structure", None), Structure):
+            return names
+    return None
 
 
 def parse_structure(text: str | Sequence[str]) -> Structure:

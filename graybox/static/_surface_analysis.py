@@ -34,7 +34,7 @@ from . import _analysis as _static
 from ._analysis import Equilibrium, Reached, ascii_cluster_name, key_index
 from ._linearisation import input_monomials_of, static_gains, static_powers, static_theta_gradient_of
 from ..core._records import frame_inputs, labelled_point
-from ..core._terms import Structure, Term, check_input_names, require_inputs, structure_of
+from ..core._terms import Structure, Term, carried_input_names, check_input_names, require_inputs, structure_of
 from ..core._transient import steady_levels
 from ..core._validation import Relocked
 from ..core._validation import check_bool, check_fields, check_per_point, frozen, real_array
@@ -65,6 +65,14 @@ def surface_inputs(structure: Structure, inputs: tuple[str, ...] | None = None) 
     names = check_input_names(inputs, what="input_names")
     require_inputs(structure.input_names, names, "which is not among the inputs")
     return names
+
+
+def _model_inputs(structure: object, input_names: object) -> tuple[Structure, object]:
+    """(the structure, the input order) of a public surface function's arguments: ``input_names``, else a model's own
+    (a Model given as the structure reads ū in its ``input_names`` order, as its methods do: in the structure's order
+    it read another input's levels for each, silently), else None (the structure's order)."""
+    carried = carried_input_names(structure)
+    return structure_of(structure), (carried if input_names is None else input_names)
 
 
 def surface_powers(term: Term, inputs: tuple[str, ...]) -> tuple[int, ...]:
@@ -253,15 +261,15 @@ def surface_equilibria(structure: Structure, theta: np.ndarray, ubar: np.ndarray
     ubar : array_like, shape (m,)
         One point of input space (engineering units), columns in ``input_names`` order.
     input_names : tuple of str, optional
-        Input order (default: the structure's inputs).
+        Input order (default: a model's own ``input_names``, else the structure's inputs).
 
     Returns
     -------
     list of Equilibrium
         ``ubar`` of each is the tuple (ū_1, …, ū_m).
     """
+    names = surface_inputs(*_model_inputs(structure, input_names))
     structure, theta = _static.checked_model(structure, theta)
-    names = surface_inputs(structure, input_names)
     ub = points_of_inputs(ubar, names, one_point=True)
     if ub.shape[0] != 1:
         raise ValueError(f"ubar must be one point of shape ({len(names)},), got shape {np.shape(ubar)}")
@@ -336,7 +344,7 @@ def static_surface(
         Raise ``ValueError`` naming each ū where no equilibrium is reached (the first 20, and how many more; else
         NaN there).
     input_names : tuple of str, optional
-        Input order (default: the structure's inputs).
+        Input order (default: a model's own ``input_names``, else the structure's inputs).
 
     Returns
     -------
@@ -344,8 +352,8 @@ def static_surface(
         Output units.
     """
     strict = check_bool(strict, "strict")
+    names = surface_inputs(*_model_inputs(structure, input_names))
     structure, th = _static.checked_model(structure, theta)
-    names = surface_inputs(structure, input_names)
     ub = points_of_inputs(ubar, names)
     if y0 is not None:
         y0 = check_per_point(y0, ub.shape[0], "y0")
@@ -387,8 +395,8 @@ def static_surface_gain(
     ndarray, shape (M, m)
         Entry (j, i) in output units per unit of input i.
     """
+    names = surface_inputs(*_model_inputs(structure, input_names))
     structure, th = _static.checked_model(structure, theta)
-    names = surface_inputs(structure, input_names)
     ub = points_of_inputs(ubar, names)
     yb = static_surface(structure, th, ub, y0, strict=strict, input_names=names)
     p, A = static_powers(structure, names)
