@@ -130,3 +130,31 @@ def test_a_model_given_as_the_structure_reads_its_points_in_its_own_input_order(
     # a Structure (no order of its own) still reads the structure's inputs' order, and input_names= overrides
     assert gb.static_surface(m.structure, m.theta, pt).tolist() == [402.0]
     assert gb.static_surface(m, m.theta, pt, input_names=("a", "b")).tolist() == [402.0]
+
+
+@pytest.mark.parametrize("k", [-700, -530, -400, 0, 400, 530, 660])
+def test_figures_of_merit_do_not_depend_on_the_output_scale(k):
+    # RRSE and fit % of an output near 2^±530 (1e±160): numpy's norms squared the samples, so near 1e200 the output
+    # was 'constant' (ValueError) and near 1e-160 RRSE was 0.173176 for 0.173205; mse, j1, js and jsf warned
+    # 'overflow encountered in square' (an error under -W error) where the error is beyond the float range
+    s = 2.0**k
+    y = np.array([0.0, 1.0, 3.0, 2.0, 5.0])
+    yh = np.array([0.5, 1.0, 2.5, 2.0, 4.0])
+    assert gb.rrse(s * y, s * yh) == pytest.approx(gb.rrse(y, yh), rel=1e-14)
+    assert gb.fit_percent(s * y, s * yh) == pytest.approx(gb.fit_percent(y, yh), rel=1e-14)
+    expected = np.mean((s * y - s * yh) ** 2) if abs(k) < 500 else None
+    with np.errstate(over="raise", invalid="raise"):  # numpy's default ignores underflow: 2^-1400 is 0
+        got = gb.mse(s * y, s * yh)
+    if expected is not None:
+        assert got == pytest.approx(expected, rel=1e-14)
+    elif k > 0:
+        assert got == np.inf  # beyond the float range, said as inf
+
+
+def test_scores_of_a_run_beyond_the_float_range_are_inf_without_numpy_warnings():
+    m = gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0])
+    rec = gb.Record(np.full(20, 1e200), np.linspace(0.0, 1.0, 20))
+    sp = gb.StaticPoints([1e200, 2e200], [1.0, 2.0])
+    with np.errstate(over="raise", invalid="raise"):
+        assert gb.j1(m, rec) == gb.js(m, rec) == gb.jsf(m, sp) == np.inf
+        assert gb.rrse(rec.y, np.full(20, 1e308)) == np.inf

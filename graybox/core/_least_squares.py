@@ -19,7 +19,7 @@ from ._terms import Structure, Term
 
 __all__ = ["column_scales", "scaled_lstsq", "thread_pools", "one_blas_thread", "check_rows", "free_directions",
            "check_identified", "rank_tolerance", "HELD_OUTPUT", "CONSTANT_RTOL", "output_spread", "output_scale",
-           "spread_scale", "beyond_float_range", "binary_scaled", "unscaled_theta", "unscaled_rss"]
+           "spread_scale", "beyond_float_range", "binary_scaled", "unscaled_theta", "unscaled_rss", "scaled_norm"]
 
 _CONTROLLER: list[ThreadpoolController] = []
 
@@ -75,14 +75,28 @@ def column_scales(A: np.ndarray) -> np.ndarray:
 CONSTANT_RTOL = 1e-13
 
 
+def scaled_norm(x: np.ndarray) -> float:
+    """‖x‖ (Euclidean) of a 1-D array, computed on x / max|x| so that no square leaves the float range: numpy's
+    norm of values near 1e200 was inf (with an overflow warning) and of values near 1e-200 was 0 (the squares
+    underflowed), 1e-160 a few digits off. inf where x holds an inf or its norm is beyond the float range."""
+    x = np.asarray(x, float)
+    m = float(np.max(np.abs(x), initial=0.0))
+    if not 0.0 < m < np.inf:
+        return m  # 0 (or empty), inf, or NaN
+    with np.errstate(over="ignore"):
+        return float(m * np.linalg.norm(x / m))
+
+
 def output_spread(y: np.ndarray) -> float:
     """‖y − mean(y)‖ of a measured output (output units), 0.0 where it is constant to round-off
     (:data:`CONSTANT_RTOL`): the denominator of RRSE and fit %, undefined for a held output."""
     y = np.asarray(y, float)
     if y.size == 0:  # no samples: no spread (and no mean of an empty slice)
         return 0.0
-    den = float(np.linalg.norm(y - y.mean()))
-    return 0.0 if den <= CONSTANT_RTOL * float(np.linalg.norm(y)) else den
+    # in a scale of the output's own (an output near 1e200 was 'constant', its norms inf; near 1e-200 their squares
+    # were 0): the same spread in any units
+    den = scaled_norm(y - y.mean())
+    return 0.0 if den <= CONSTANT_RTOL * scaled_norm(y) else den
 
 
 def spread_scale(std: float, rms: float) -> float:

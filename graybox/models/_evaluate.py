@@ -24,7 +24,7 @@ from typing import Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from ..core._least_squares import CONSTANT_RTOL, output_spread  # noqa: F401 (their home is core; named here too)
+from ..core._least_squares import CONSTANT_RTOL, output_spread, scaled_norm  # noqa: F401 (their home is core)
 from ..core._simulation_kernels import batch_sse, encode, record_inputs
 from ._model import Model
 from ._coerce import as_model, as_record, as_structure, static_info
@@ -59,10 +59,11 @@ def mse(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
     ``y`` (measured) and ``yhat`` are 1-D of one length, ``y`` finite; ``start`` >= 0.
     """
     y, yhat = _measured_and_model(y, yhat, start)
-    e = y - yhat
-    if not np.all(np.isfinite(e)):
-        return float("inf")
-    return float(np.mean(e**2))
+    with np.errstate(over="ignore"):  # an error beyond the float range is inf, and says so (numpy's warning did not)
+        e = y - yhat
+        if not np.all(np.isfinite(e)):
+            return float("inf")
+        return float(np.mean(e**2))
 
 
 def j1(model: Model, record: Record | Dataset) -> float:
@@ -146,7 +147,8 @@ def rrse(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
     den = output_spread(y)
     if den == 0:
         raise ValueError("RRSE undefined: the measured output is constant")
-    return float(np.linalg.norm(y - yhat) / den)
+    with np.errstate(over="ignore"):  # ‖y − ŷ‖ beyond the float range: inf, as mse's (numpy warned)
+        return float(scaled_norm(y - yhat) / den)  # in the output's own scale, as den is: the same in any units
 
 
 def fit_percent(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
