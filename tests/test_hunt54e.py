@@ -158,3 +158,18 @@ def test_scores_of_a_run_beyond_the_float_range_are_inf_without_numpy_warnings()
     with np.errstate(over="raise", invalid="raise"):
         assert gb.j1(m, rec) == gb.js(m, rec) == gb.jsf(m, sp) == np.inf
         assert gb.rrse(rec.y, np.full(20, 1e308)) == np.inf
+
+
+@pytest.mark.parametrize("other", [dict(units=("rad/s", "mlc")), dict(Ts=0.5)], ids=["units", "period"])
+def test_the_free_run_functions_given_a_model_refuse_records_it_does_not_hold_on(other):
+    # gb.simulate, gb.predict and gb.simulate_many given a Model ran a record in other units (or at another period)
+    # with its θ, silently, where Model.simulate, js, jsf and evaluate_thetas refuse it
+    m = gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0], Ts=1.0, units=("rpm", "mlc"))
+    rec = gb.Record(np.ones(10), np.ones(10), **({"Ts": 1.0, "units": ("rpm", "mlc")} | other))
+    for call in (lambda: gb.simulate(m, m.theta, rec), lambda: gb.predict(m, m.theta, rec),
+                 lambda: gb.simulate_many(m, m.theta[None], rec), lambda: m.simulate(rec)):
+        with pytest.raises(ValueError, match="model '' was identified"):
+            call()
+    ok = gb.Record(np.ones(10), np.ones(10), Ts=1.0, units=("rpm", "mlc"))
+    assert np.array_equal(gb.simulate(m, m.theta, ok), m.simulate(ok))
+    assert np.array_equal(gb.simulate(m.structure, m.theta, rec), m.simulate(ok))  # a Structure knows no units

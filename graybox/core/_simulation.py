@@ -20,11 +20,22 @@ from ._validation import as_1d_finite, check_choice, check_finite_rows, check_in
 from ._regressors import regressor_columns
 from ._terms import Structure, structure_of
 
-__all__ = ["predict", "simulate", "simulate_many", "DivergenceError", "free_run_inputs", "default_bound"]
+__all__ = ["predict", "simulate", "simulate_many", "DivergenceError", "free_run_inputs", "default_bound",
+           "check_fitted_record"]
 
 
 class DivergenceError(ValueError):
     """A free run left every reasonable bound (the model is unstable along this input)."""
+
+
+def check_fitted_record(given: object, record: object) -> None:
+    """``ValueError`` when ``given`` (the structure argument) is a model, or a set or result that carries one, that
+    knows the period and units its θ hold in (its ``check_record``) and ``record`` is at another period or in other
+    units: refused as the model's own methods, js and evaluate_thetas refuse it, not run with parameters that do not
+    hold there. Anything else (a Structure, terms; an array of inputs) is not checked."""
+    fitted = given if callable(getattr(given, "check_record", None)) else getattr(given, "model", None)
+    if isinstance(record, Record) and callable(getattr(fitted, "check_record", None)):
+        fitted.check_record(record)
 
 
 def predict(structure: Structure, theta: np.ndarray, record: Record, *, horizon: int = 1) -> np.ndarray:
@@ -55,6 +66,7 @@ def predict(structure: Structure, theta: np.ndarray, record: Record, *, horizon:
         ahead, NaN only where the prediction leaves the float range (a high power of a large u or y).
     """
     require_record(record)  # a Dataset: told to pass data.ident or data.valid
+    check_fitted_record(structure, record)
     structure = structure_of(structure)
     th = check_theta(len(structure), theta)
     horizon = check_int(horizon, "horizon", low=1)
@@ -185,6 +197,7 @@ def simulate(
     -------
     ndarray, shape (N,)
     """
+    check_fitted_record(structure, u)  # a model's θ hold at its period, in its units
     carried = carried_input_names(structure)
     if input_names is None and carried is not None and len(carried) > 1:
         input_names = carried  # a model's array is read in its own column order, as Model.simulate reads it
@@ -241,8 +254,9 @@ def simulate_many(
         A diverging member has non-finite samples; this never raises for divergence.
     """
     threads = check_int(threads, "threads", low=1)
-    structure = structure_of(structure)
     require_record(record)  # a Dataset: told to pass data.ident or data.valid
+    check_fitted_record(structure, record)
+    structure = structure_of(structure)
     # the one conversion of numbers (text, booleans, None: TypeError; beyond the float range: ValueError)
     th = real_array(thetas, "thetas", "parameter vectors (numbers), shape (P, n_terms)")
     if th.ndim != 2 or th.shape[1] != len(structure):
