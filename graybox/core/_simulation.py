@@ -91,7 +91,9 @@ def default_bound(y0: np.ndarray, scale: float = 0.0) -> float:
 
     ``scale`` is what the model says of its output's size (a network's output range); where both
     are 0 only an overflow counts (the largest float). A polynomial model's free run applies the
-    same rule sample by sample in its kernel (:func:`~graybox.core._simulation_kernels.simulate_one`).
+    same rule sample by sample in its kernel (:func:`~graybox.core._simulation_kernels.simulate_one`),
+    its scale the larger of its feedback scale and the level its inputs' push so far holds the output at
+    (:func:`~graybox.core._simulation_kernels.push_gains`).
     """
     return float(scaled_bound(max(float(np.max(np.abs(y0), initial=0.0)), float(scale))))
 
