@@ -44,7 +44,8 @@ def predict(structure: Structure, theta: np.ndarray, record: Record, *, horizon:
     Parameters
     ----------
     structure : Structure, sequence of str, or a model
-        Process terms (a model, or a result with ``.structure``, gives its own).
+        Process terms (a model, or a result with ``.structure``, gives its own, and refuses a record
+        sampled at another period or in other units than its own).
     theta : ndarray, shape (n_terms,)
     record : Record
         Measured input(s) and output; every input the structure uses must be among the
@@ -170,7 +171,8 @@ def simulate(
     ----------
     structure : Structure, sequence of str, or a model
         Process terms (noise terms are not simulated; a model, or a result with ``.structure``,
-        gives its own).
+        gives its own, its input order for an array ``u``, and refuses a Record sampled at another period
+        or in other units than its own).
     theta : ndarray, shape (n_terms,)
     u : ndarray or pandas.DataFrame, shape (N,) or (N, m), or Record
         Input(s). With a Record, ``y0`` defaults to its first ``max_lag`` outputs and the
@@ -242,7 +244,8 @@ def simulate_many(
     Parameters
     ----------
     structure : Structure, sequence of str, or a model
-        Process terms (a model, or a result with ``.structure``, gives its own).
+        Process terms (a model, or a result with ``.structure``, gives its own, and refuses a record
+        sampled at another period or in other units than its own).
     thetas : ndarray, shape (P, n_terms)
         Finite: a row with a NaN or inf is no model, and is refused naming it (``ValueError``).
     record : Record
