@@ -76,15 +76,16 @@ CONSTANT_RTOL = 1e-13
 
 
 def scaled_norm(x: np.ndarray) -> float:
-    """‖x‖ (Euclidean) of a 1-D array, computed on x / max|x| so that no square leaves the float range: numpy's
+    """‖x‖ (Euclidean) of a 1-D array, computed on x over the power of two above max|x| so that no square leaves the float range: numpy's
     norm of values near 1e200 was inf (with an overflow warning) and of values near 1e-200 was 0 (the squares
     underflowed), 1e-160 a few digits off. inf where x holds an inf or its norm is beyond the float range."""
     x = np.asarray(x, float)
     m = float(np.max(np.abs(x), initial=0.0))
     if not 0.0 < m < np.inf:
         return m  # 0 (or empty), inf, or NaN
+    e = int(np.frexp(m)[1])  # by a power of two, exact: in range, the very norm numpy takes of x (Table I's pins)
     with np.errstate(over="ignore"):
-        return float(m * np.linalg.norm(x / m))
+        return float(np.ldexp(np.linalg.norm(np.ldexp(x, -e)), e))
 
 
 def output_spread(y: np.ndarray) -> float:
