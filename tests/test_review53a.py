@@ -24,7 +24,9 @@ def test_a_time_column_in_ticks_written_as_a_power_with_a_caret_or_superscript_i
         gb.load_record_csv(p, u="u", y="y", time=col)
 
 
-@pytest.mark.parametrize("col", ["t [1 s]", "t [ 1 s ]", "t [1.0 s]", "t [1 sec]", "Time (s)", "t [sec]", "t [s]"])
+# (review54a's tick units beside them: "t [1s]", "t [1.0 sec]", "t [1 second]", "time (x)", "t_s")
+@pytest.mark.parametrize("col", ["t [1 s]", "t [ 1 s ]", "t [1.0 s]", "t [1 sec]", "Time (s)", "t [sec]", "t [s]", "t [1s]",
+                                 "t [1.0 sec]", "t [1 second]", "time (x)", "t_s"])
 def test_a_time_column_in_seconds_is_still_read(tmp_path, col):
     p = tmp_path / "r.csv"
     p.write_text(f"{col};u;y\n" + "".join(f"{k / 2};{k % 3};{0.5 * k}\n" for k in range(8)), encoding="utf-8")

@@ -55,13 +55,6 @@ def test_a_time_column_in_ticks_of_any_named_unit_or_a_written_power_is_refused(
         gb.load_record_csv(p, u="u", y="y", time=col)
 
 
-@pytest.mark.parametrize("col", ["t [1 s]", "t [1s]", "t [1.0 sec]", "t [1 second]", "t [s]", "time (x)", "t_s"])
-def test_a_time_column_in_seconds_is_read_beside_the_longer_tick_units(tmp_path, col):
-    p = tmp_path / "r.csv"
-    p.write_text(f"{col};u;y\n" + "".join(f"{k / 2};{k % 3};{0.5 * k}\n" for k in range(8)), encoding="utf-8")
-    assert gb.load_record_csv(p, u="u", y="y", time=col).Ts == 0.5
-
-
 def _tiny_input_record():
     rng = np.random.default_rng(0)
     u = rng.uniform(0.5, 1.5, 60)
