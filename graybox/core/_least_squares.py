@@ -19,7 +19,7 @@ from ._terms import Structure, Term
 
 __all__ = ["column_scales", "scaled_lstsq", "thread_pools", "one_blas_thread", "check_rows", "free_directions",
            "check_identified", "rank_tolerance", "HELD_OUTPUT", "CONSTANT_RTOL", "output_spread", "output_scale",
-           "spread_scale", "beyond_float_range", "binary_scaled", "unscaled_theta", "unscaled_rss", "scaled_norm"]
+           "spread_scale", "beyond_float_range", "refuse_beyond_float_range", "binary_scaled", "unscaled_theta", "unscaled_rss", "scaled_norm"]
 
 _CONTROLLER: list[ThreadpoolController] = []
 
@@ -165,6 +165,14 @@ def beyond_float_range(which: str, prefix: str = "") -> ValueError:
     too large (an input of 1e153 beside an output of 1e-20: a θ of 1e-327, below the normal floats)."""
     return ValueError(f"{prefix}the parameter(s) of {which} are beyond the float range (those columns are too small "
                       "or too large beside the target in these units: rescale the signals)")
+
+
+def refuse_beyond_float_range(terms: Sequence, *thetas: np.ndarray, prefix: str = "") -> None:
+    """:func:`beyond_float_range` naming the terms whose θ is not finite in any of ``thetas`` (each aligned with
+    ``terms``): a fit on scaled signals (:func:`binary_scaled`) whose θ is no float in the data's own units."""
+    far = [str(t) for t, *vs in zip(terms, *thetas) if not all(np.isfinite(v) for v in vs)]
+    if far:  # u(k-1)² of an input about 1e-160 is about 1e-320: its θ, about 1e320, is no float
+        raise beyond_float_range(str(far), prefix)
 
 
 def rank_tolerance(largest: float, rows: int, n: int = 0) -> float:

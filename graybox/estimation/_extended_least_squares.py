@@ -84,8 +84,8 @@ from scipy.linalg import solve_triangular
 from scipy.optimize import least_squares
 
 from ..core._simulation_kernels import inverse_ma_filter
-from ..core._least_squares import (beyond_float_range, binary_scaled, check_identified, check_rows, column_scales, free_directions,
-                                   scaled_lstsq, unscaled_theta)
+from ..core._least_squares import (binary_scaled, check_identified, check_rows, column_scales, free_directions,
+                                   refuse_beyond_float_range, scaled_lstsq, unscaled_theta)
 from ..models._coerce import as_structure, records_of
 from ..models._model import Model
 from ..selection._centring import centred_data, is_closed, raw_theta, signal_offsets
@@ -536,10 +536,7 @@ def _result(reg: _Regression, theta: np.ndarray, c: np.ndarray, n_iter: int, con
         terms = list(reg.process)
         theta, theta_ls = unscaled_theta(theta, terms, exps), unscaled_theta(theta_ls, terms, exps)
         c = unscaled_theta(c, list(reg.ns), exps)
-        far = [str(t) for t, a, b in zip(terms + list(reg.ns), np.r_[theta, c], np.r_[theta_ls, c])
-               if not (np.isfinite(a) and np.isfinite(b))]
-        if far:  # u(k-1)² of an input about 1e-160 is about 1e-320: its θ, about 1e320, is no float
-            raise beyond_float_range(str(far), f"{name}: ")
+        refuse_beyond_float_range(terms + list(reg.ns), np.r_[theta, c], np.r_[theta_ls, c], prefix=f"{name}: ")
         with np.errstate(over="ignore", under="ignore"):
             x = np.ldexp(x, exps["y"])  # the residuals in the output's units
     m = Model(reg.process, theta, noise_structure=reg.ns, noise_theta=c, name=name, **carried_from(reg.recs))

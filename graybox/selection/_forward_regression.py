@@ -70,7 +70,7 @@ from ..core._gram import (
     term_factors,
     triangular_factor,
 )
-from ..core._least_squares import (beyond_float_range, binary_scaled, one_blas_thread, unscaled_rss,
+from ..core._least_squares import (binary_scaled, one_blas_thread, refuse_beyond_float_range, unscaled_rss,
                                    unscaled_theta)
 from ..core._regressors import check_structure_inputs, record_signals
 from ..core._validation import Relocked
@@ -812,7 +812,7 @@ def frols(
     theta_scaled = _back_substitute(np.triu(R), g[:n_sel])
     with np.errstate(over="ignore"):  # a column of 1e-320 beside an output of 1: a θ of 1e320, refused below
         theta = unscaled_theta(theta_scaled / cols.scales[idx], [process[j] for j in idx], exps)
-    _refuse_beyond_float_range(theta, [process[j] for j in idx])
+    refuse_beyond_float_range([process[j] for j in idx], theta, prefix="frols: ")
     evaluated = Structure([process[j] for j in chosen])
     return Selection(
         structure=evaluated[:n_sel],
@@ -885,7 +885,7 @@ def _frols_centred(candidates: Structure, data: object, **options) -> Selection:
     own = {k: math.ldexp(v, exps.get(k, 0)) for k, v in offsets.items()}  # the data's own offsets
     stop = _centring.stop_note(sel.stop, len(sel.structure), len(full), own, dropped)
     theta = unscaled_theta(_centring.raw_theta(closed, fit.theta, offsets), list(closed), exps)
-    _refuse_beyond_float_range(theta, list(closed))
+    refuse_beyond_float_range(list(closed), theta, prefix="frols: ")
     if exps:  # RSS and the criterion curve in the data's own units (the fit's rows: L on, of each record)
         n_rows = sum(len(r.y) - L for r in as_gram_records(data))
         fit = replace(fit, rss=unscaled_rss(fit.rss, exps),
@@ -893,14 +893,6 @@ def _frols_centred(candidates: Structure, data: object, **options) -> Selection:
         subset_rss = unscaled_rss(np.asarray(subset_rss), exps) if len(subset_rss) else subset_rss
     return replace(fit, theta=theta, stop=stop, n_candidates=sel.n_candidates, skipped=skipped, search=sel.search,
                    subsets=subsets, subset_rss=subset_rss)
-
-
-def _refuse_beyond_float_range(theta: np.ndarray, terms: list) -> None:
-    """The error ELS, semp, CLS and PE give (naming the terms, saying to rescale) for a θ that is no float in the
-    data's units, where the Selection would say 'theta has non-finite values at [2]'."""
-    far = [str(t) for t, v in zip(terms, theta) if not np.isfinite(v)]
-    if far:
-        raise beyond_float_range(str(far), "frols: ")
 
 
 # --------------------------------------------------------------------------------------

@@ -39,7 +39,8 @@ import pandas as pd
 import scipy.linalg
 
 from ..core._gram import triangular_factor
-from ..core._least_squares import beyond_float_range, binary_scaled, column_scales, one_blas_thread, output_scale, unscaled_theta
+from ..core._least_squares import (binary_scaled, column_scales, one_blas_thread, output_scale, refuse_beyond_float_range,
+                                   unscaled_theta)
 from ..core._regressors import refuse_non_finite_columns
 from ..core._simulation_kernels import batch_sse, encode, input_products, record_inputs
 from ..models._model import Model, model_input_names
@@ -387,9 +388,7 @@ def _unscaled(res: SEMPResult, exps: dict[str, int]) -> SEMPResult:
         fwd[:] = np.ldexp(fwd.to_numpy(float), 2 * ey)
         score = float(np.ldexp(res.score, 2 * ey))
     theta = unscaled_theta(res.theta, list(res.structure), exps)
-    far = [str(t) for t, th in zip(res.structure, theta) if not np.isfinite(th)]
-    if far:  # u(k-1)² of an input about 1e-160 is about 1e-320: its θ, about 1e320, is no float
-        raise beyond_float_range(str(far), "semp: the structure chosen cannot be used on these data: ")
+    refuse_beyond_float_range(res.structure, theta, prefix="semp: the structure chosen cannot be used on these data: ")
     return replace(res, theta=frozen(theta), score=score, path=path, forward_scores=fwd)
 
 
