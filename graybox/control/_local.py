@@ -34,9 +34,8 @@ from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, 
 from ..core._terms import Structure, check_input_names
 from ..core._transient import steady_levels
 from ..core._reprs import exact_text, listed
-from ..core._validation import Relocked
-from ..core._validation import (check_count, check_band_finite, check_band_values, check_choice, check_fields, check_int,
-                                check_per_point, check_real, check_seed, frozen, real_array, warn)
+from ..core._validation import (Relocked, check_count, check_band_finite, check_band_values, check_choice, check_fields,
+                                check_int, check_per_point, check_real, check_seed, frozen, real_array, warn)
 from ..models._coerce import as_model
 from ..models._model import Model
 from ..static._analysis import (CONTINUUM_WHY, NO_EQUILIBRIUM_WHY, REACHED, Equilibrium, Reached, continuum,

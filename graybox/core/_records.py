@@ -19,9 +19,8 @@ import numpy as np
 
 from ._reprs import listed, range_text
 from ._terms import check_input_names, default_input_names, transient_source
-from ._validation import Relocked
-from ._validation import (as_1d_finite, locked, check_int, check_per_point, check_real, check_str, float_array, frozen_value,
-                          refuse_non_real, warn)
+from ._validation import (Relocked, as_1d_finite, locked, check_int, check_per_point, check_real, check_str,
+                          float_array, frozen_value, refuse_non_real, warn)
 
 __all__ = ["Record", "StaticPoints", "StaticRangeWarning", "warn_static_range"]
 

@@ -68,8 +68,7 @@ import numba as nb
 import numpy as np
 
 from ..core._records import Record, StaticPoints, frame_inputs
-from ..core._validation import Relocked
-from ..core._validation import as_1d_finite, check_real, locked, real_array
+from ..core._validation import Relocked, as_1d_finite, check_real, locked, real_array
 from .pumping import (DEFAULT_SEED, PumpingPlant, _staircase, check_plant, check_static_levels, initial_state,
                       reference_lengths, regenerate_main, static_samples, static_speeds, write_csv_pair)
 from ..core._reprs import short_repr

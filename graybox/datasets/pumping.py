@@ -202,9 +202,8 @@ import numpy as np
 
 from ..core._files import write_atomically
 from ..core._records import Record, StaticPoints
-from ..core._validation import Relocked
-from ..core._validation import (as_1d_finite, check_bool, check_count, check_int, check_real, check_seed, locked,
-                                real_array)
+from ..core._validation import (Relocked, as_1d_finite, check_bool, check_count, check_int, check_real, check_seed,
+                                locked, real_array)
 from ..reference import EQ1_COEFFICIENTS
 from ..core._reprs import short_repr
 

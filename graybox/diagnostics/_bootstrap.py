@@ -58,8 +58,7 @@ from ..static._curves import StaticCurve
 from ..static._surfaces import StaticSurface
 from ..estimation._simulation_error import SE_LAMBDAS, se_pareto
 from ..core._terms import Structure
-from ..core._validation import Relocked
-from ..core._validation import (FrozenMap, check_band, check_choice, check_count, check_fields, check_int,
+from ..core._validation import (Relocked, FrozenMap, check_band, check_choice, check_count, check_fields, check_int,
                                 check_lambdas, check_mean_square, check_real, check_seed, frozen, frozen_value, warn)
 from ..core._reprs import listed, share_text, short_repr
 from ._uncertainty import UncertaintyWarning

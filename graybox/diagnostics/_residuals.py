@@ -81,9 +81,8 @@ from ..core._regressors import record_signals, regressor_matrix
 from ..core._simulation_kernels import inverse_ma_filter
 from ..core._reprs import percent_text
 from ..estimation._extended_least_squares import _ma_invertible, _ma_text
-from ..core._validation import Relocked
-from ..core._validation import (FrozenMap, check_agrees, check_bool, check_choice, check_fields, check_int, check_level,
-                                check_real, frozen, warn)
+from ..core._validation import (Relocked, FrozenMap, check_agrees, check_bool, check_choice, check_fields, check_int,
+                                check_level, check_real, frozen, warn)
 
 #: What a model argument of the residual tests may be, in words.
 _ACCEPTED = MODEL_ACCEPTED.replace("a Model or", "a Model, a NeuralModel or").replace(")", ", NeuralFit)")

@@ -19,8 +19,7 @@ from ..core._records import check_units, said_units
 from ..core._simulation import simulate_many
 from ..core._simulation_kernels import encode, free_run_sensitivity_blocks, input_products, record_inputs
 from ..core._reprs import share_text
-from ..core._validation import Relocked
-from ..core._validation import (check_count, check_band_finite, check_band_values, check_choice, check_fields,
+from ..core._validation import (Relocked, check_count, check_band_finite, check_band_values, check_choice, check_fields,
                                 check_level, check_real, check_seed, frozen, warn)
 from ..models._coerce import as_record
 from ._uncertainty import (BAND_METHODS, MIN_DRAWS, ParameterUncertainty, UncertaintyWarning, check_band_draws,

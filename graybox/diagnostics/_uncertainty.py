@@ -76,9 +76,8 @@ from ..static._analysis import one_input_levels, reached_equilibria, static_thet
 from ..static._linearisation import static_gain_gradient, static_gains, static_powers, static_theta_gradient_of
 from ..static._surface_analysis import points_of_inputs, reached_surface, static_surface, surface_theta_gradient
 from ..core._reprs import share_text
-from ..core._validation import Relocked
-from ..core._validation import (check_count, check_band_finite, check_band_values, check_choice, check_fields, check_int,
-                                check_level, check_real, check_seed, frozen, warn)
+from ..core._validation import (Relocked, check_count, check_band_finite, check_band_values, check_choice, check_fields,
+                                check_int, check_level, check_real, check_seed, frozen, warn)
 
 __all__ = [
     "ParameterUncertainty",

@@ -28,8 +28,7 @@ from ..core._records import (Record, check_overlap, check_print_overlap, choosin
 from ..core._reprs import beside, bound_text, squared_text
 from ..core._regressors import regressor_matrix
 from ..core._simulation import simulate_many
-from ..core._validation import Relocked
-from ..core._validation import check_band, check_choice, check_fields, check_mean_square, check_weight
+from ..core._validation import Relocked, check_band, check_choice, check_fields, check_mean_square, check_weight
 from ..static._constraints import InfeasibleError
 from ..core._records import StaticPoints
 

@@ -49,8 +49,7 @@ from ._simulation_error import (SEProblem, _Failed, _multistart, _pe_members, _p
 from ..core._terms import Structure
 from ..static._curves import StaticCurve
 from ..static._surfaces import StaticSurface
-from ..core._validation import Relocked
-from ..core._validation import (_is_number, check_fields, check_int, check_lambdas, check_margin_value,
+from ..core._validation import (Relocked, _is_number, check_fields, check_int, check_lambdas, check_margin_value,
                                 check_mean_square, check_real, check_theta, warn)
 
 __all__ = ["se_dsf", "DSFResult"]

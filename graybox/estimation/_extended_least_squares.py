@@ -92,9 +92,8 @@ from ..selection._centring import centred_data, is_closed, raw_theta, signal_off
 from ..core._records import Dataset, Record, carried_from
 from ..core._regressors import regressor_matrix, stacked_regressors
 from ..core._terms import Structure, Term
-from ..core._validation import Relocked
-from ..core._validation import (check_bool, check_int, check_real, check_fields, check_sequence, check_str, frozen,
-                                short_value, warn)
+from ..core._validation import (Relocked, check_bool, check_int, check_real, check_fields, check_sequence, check_str,
+                                frozen, short_value, warn)
 
 __all__ = ["els", "ELSResult", "ELSConvergenceWarning", "noise_terms"]
 

@@ -131,9 +131,8 @@ from scipy.optimize import brentq
 from ..core._least_squares import output_spread
 from ..core._records import (Dataset, Record, as_records, carried_from, check_fitted_on, check_units, require_lengths,
                              require_record)
-from ..core._validation import Relocked
-from ..core._validation import (check_bool, check_choice, check_int, check_per_point, check_real,
-                                check_seed, check_str, frozen, check_fields, real_array, short_value)
+from ..core._validation import (Relocked, check_bool, check_choice, check_int, check_per_point, check_real, check_seed,
+                                check_str, frozen, check_fields, real_array, short_value)
 from ..core._simulation import DivergenceError, default_bound, free_run_inputs
 from ..core._simulation_kernels import record_inputs
 from ..core._terms import check_input_names

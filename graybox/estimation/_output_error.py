@@ -48,8 +48,7 @@ from ..core._progress import progress_bar
 from ..core._records import (Dataset, Record, as_records, carried_from, check_alike, check_overlap, choosing_records,
                              same_record)
 from ..core._terms import Structure
-from ..core._validation import Relocked
-from ..core._validation import (FrozenFrame, FrozenMap, check_bool, check_choice, check_fields, check_int,
+from ..core._validation import (Relocked, FrozenFrame, FrozenMap, check_bool, check_choice, check_fields, check_int,
                                 check_margin_value, check_mean_square, check_real, check_seed, check_str, check_theta)
 from ..models._coerce import as_structure
 from ..models._model import Model

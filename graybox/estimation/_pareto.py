@@ -19,8 +19,7 @@ from ..models._coerce import as_structure
 from ..models._model import Model, model_input_names
 from ..core._records import (Dataset, Record, RecordPrint, StaticPoints, as_records, carried_from, check_fitted_on,
                              check_units, record_print)
-from ..core._validation import Relocked
-from ..core._validation import (FrozenMap, check_bool, check_fields, check_int, check_mean_square, check_real,
+from ..core._validation import (Relocked, FrozenMap, check_bool, check_fields, check_int, check_mean_square, check_real,
                                 check_weight, frozen, real_array)
 from ..core._terms import Structure
 

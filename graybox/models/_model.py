@@ -12,8 +12,7 @@ from ..static import _analysis as _static
 from ..static import _surface_analysis as _static_surface
 from ..core._equation_text import latex_equation
 from ..core._records import Record, check_fitted_on, check_period, check_units
-from ..core._validation import Relocked
-from ..core._validation import check_int, check_real, check_sequence, check_str, check_theta, frozen
+from ..core._validation import Relocked, check_int, check_real, check_sequence, check_str, check_theta, frozen
 from ..core._terms import Structure, check_input_names, require_inputs, structure_of
 
 __all__ = ["Model", "model_input_names"]

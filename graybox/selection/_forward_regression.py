@@ -73,9 +73,8 @@ from ..core._gram import (
 from ..core._least_squares import (binary_scaled, one_blas_thread, refuse_beyond_float_range, unscaled_rss,
                                    unscaled_theta)
 from ..core._regressors import check_structure_inputs, record_signals
-from ..core._validation import Relocked
-from ..core._validation import (as_1d_finite, check_bool, check_choice, check_fields, check_int, check_mean_square, check_real,
-                                check_theta, locked, warn)
+from ..core._validation import (Relocked, as_1d_finite, check_bool, check_choice, check_fields, check_int,
+                                check_mean_square, check_real, check_theta, locked, warn)
 from ._stopping import choose_model, stop_rule, FewerTermsError, StopRule
 from . import _centring
 from ._subset_search import search_sizes, SearchBudget, SubsetProblem

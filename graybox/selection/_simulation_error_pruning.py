@@ -49,9 +49,8 @@ from ._forward_regression import CRITERIA, CandidateWarning, criterion_of_sizes
 from ._stopping import choose_model, stop_rule
 from ..core._terms import Structure, Term, structure_of
 from . import _centring
-from ..core._validation import Relocked
-from ..core._validation import (FrozenFrame, check_bool, check_choice, check_fields, check_int, check_mean_square,
-                                check_real, check_theta, frozen, warn)
+from ..core._validation import (Relocked, FrozenFrame, check_bool, check_choice, check_fields, check_int,
+                                check_mean_square, check_real, check_theta, frozen, warn)
 
 __all__ = ["semp", "SEMPResult"]
 

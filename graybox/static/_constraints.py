@@ -48,8 +48,8 @@ from ._surfaces import StaticSurface, box_grid
 from ._analysis import ClusterMap, cluster_map, cluster_name, denominator_vanishes, is_rational, vanishing_denominator
 from ._surface_analysis import SurfaceClusterMap, surface_cluster_map, surface_static_rows
 from ..core._terms import Structure, transient_source
-from ..core._validation import Relocked
-from ..core._validation import FrozenMap, check_choice, check_int, check_real, check_sequence, check_str, short_value
+from ..core._validation import (Relocked, FrozenMap, check_choice, check_int, check_real, check_sequence, check_str,
+                                short_value)
 from ..core._reprs import level_texts, short_repr
 
 if TYPE_CHECKING:  # cvxpy takes seconds to import: loaded where a user constraint needs it

@@ -36,8 +36,7 @@ from ._linearisation import input_monomials_of, static_gains, static_powers, sta
 from ..core._records import frame_inputs, labelled_point
 from ..core._terms import Structure, Term, carried_input_names, check_input_names, require_inputs, structure_of
 from ..core._transient import steady_levels
-from ..core._validation import Relocked
-from ..core._validation import check_bool, check_fields, check_per_point, frozen, real_array
+from ..core._validation import Relocked, check_bool, check_fields, check_per_point, frozen, real_array
 from ..core._renamed import RenamedAttribute
 from ..core._reprs import exact_text, point_texts, short_repr
 
