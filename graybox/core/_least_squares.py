@@ -19,7 +19,8 @@ from ._terms import Structure, Term
 
 __all__ = ["column_scales", "scaled_lstsq", "thread_pools", "one_blas_thread", "check_rows", "free_directions",
            "check_identified", "rank_tolerance", "HELD_OUTPUT", "CONSTANT_RTOL", "output_spread", "output_scale",
-           "spread_scale", "beyond_float_range", "refuse_beyond_float_range", "binary_scaled", "unscaled_theta", "unscaled_rss", "scaled_norm"]
+           "spread_scale", "beyond_float_range", "refuse_beyond_float_range", "binary_scaled", "unscaled_theta",
+           "unscaled_rss", "scaled_norm"]
 
 _CONTROLLER: list[ThreadpoolController] = []
 
@@ -76,9 +77,10 @@ CONSTANT_RTOL = 1e-13
 
 
 def scaled_norm(x: np.ndarray) -> float:
-    """‖x‖ (Euclidean) of a 1-D array, computed on x over the power of two above max|x| so that no square leaves the float range: numpy's
-    norm of values near 1e200 was inf (with an overflow warning) and of values near 1e-200 was 0 (the squares
-    underflowed), 1e-160 a few digits off. inf where x holds an inf or its norm is beyond the float range."""
+    """‖x‖ (Euclidean) of a 1-D array, computed on x over the power of two above max|x| so that no square leaves the
+    float range: numpy's norm of values near 1e200 was inf (with an overflow warning) and of values near 1e-200 was 0
+    (the squares underflowed), 1e-160 a few digits off. inf where x holds an inf or its norm is beyond the float
+    range."""
     x = np.asarray(x, float)
     m = float(np.max(np.abs(x), initial=0.0))
     if not 0.0 < m < np.inf:
@@ -292,9 +294,8 @@ _SAFE_EXPONENT = 900
 def binary_scaled(data: object, process: Structure) -> tuple[object, dict[str, int]]:
     """The in-memory records with y and each input times 2^-e, e the exponent that brings the signal's largest
     magnitude over the records into [0.5, 1), and those exponents by signal name (``"e"``, a noise term's, is y's);
-    the data as they are, and {},
-    where no candidate column's square (nor y's) can come near the ends of the floating-point range (no copy of
-    ordinary data), and for Dask records.
+    the data as they are, and {}, where no candidate column's square (nor y's) can come near the ends of the
+    floating-point range (no copy of ordinary data), and for Dask records.
 
     A power of two is exact: every candidate column is the data's times a power of two, so once scaled to unit
     RMS the columns, ERR and the choice are those of the data themselves, bit for bit, while products of large

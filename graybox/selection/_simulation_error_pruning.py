@@ -39,8 +39,8 @@ import pandas as pd
 import scipy.linalg
 
 from ..core._gram import triangular_factor
-from ..core._least_squares import (binary_scaled, column_scales, one_blas_thread, output_scale, refuse_beyond_float_range,
-                                   unscaled_theta)
+from ..core._least_squares import (binary_scaled, column_scales, one_blas_thread, output_scale,
+                                   refuse_beyond_float_range, unscaled_theta)
 from ..core._regressors import refuse_non_finite_columns
 from ..core._simulation_kernels import batch_sse, encode, input_products, record_inputs
 from ..models._model import Model, model_input_names
