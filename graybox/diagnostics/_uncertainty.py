@@ -70,7 +70,7 @@ from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, c
 from ..core._regressors import record_signals, refuse_non_finite_columns, regressor_columns, regressor_matrix
 from ._residuals import _model_residuals
 from ..estimation._simulation_error import SEProblem
-from ..selection._centring import centred_data, raw_theta, shift_map
+from ..selection._centring import affine_map, centred_data, shift_map
 from ..estimation._extended_least_squares import _ma_coefficients, _pure_lags, _shift_offsets
 from ..static._analysis import one_input_levels, reached_equilibria, static_theta_gradient
 from ..static._linearisation import static_gain_gradient, static_gains, static_powers, static_theta_gradient_of
@@ -698,8 +698,8 @@ def ls_uncertainty(
         offsets = _shift_offsets(st, ns, recs)
         if offsets is not None:
             both = Structure(list(st) + list(ns))
-            Afull, _ = _raw_map(both, offsets)
-            Ainv, tinv = _raw_map(both, {k: -v for k, v in offsets.items()})
+            Afull, _ = affine_map(both, offsets)
+            Ainv, tinv = affine_map(both, {k: -v for k, v in offsets.items()})
     except (ValueError, KeyError, IndexError, OverflowError):  # the raw regressors say what does not fit
         offsets = Afull = None
     if Afull is not None:
@@ -750,14 +750,6 @@ def ls_uncertainty(
         cov = F.T @ F
     return ParameterUncertainty(model, cov[:n, :n], level, dof, sigma2, "ELS", np.zeros((0, n)), cov[n:, n:],
                                 cov_factor=F[:, :n])
-
-
-def _raw_map(structure: Structure, offsets: dict) -> tuple[np.ndarray, np.ndarray]:
-    """``(A, t)`` with θ_raw = A θ_c + t for a model whose every term has its divisors (noise terms included, whose e
-    factors are never shifted): :func:`~graybox.selection._centring.shift_map` without its closure check."""
-    n = len(structure)
-    t = raw_theta(structure, np.zeros(n), offsets)
-    return np.column_stack([raw_theta(structure, e, offsets, level=False) for e in np.eye(n)]), t
 
 
 def _ls_uncertainty(model: Model, recs: list[Record], level: float) -> ParameterUncertainty:
