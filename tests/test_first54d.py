@@ -69,12 +69,6 @@ def test_a_toa5_files_messages_name_its_own_lines(tmp_path):
         gb.load_record_csv(f, u="Pow", y="Temp", Ts=1.0)
 
 
-def test_a_toa5_timestamp_is_a_date_refused_naming_ts(tmp_path):
-    f = _write(tmp_path / "t.dat", TOA5_HEAD + TOA5_ROWS)
-    with pytest.raises(ValueError, match=r"line 5, column 'TIMESTAMP': '2026-01-01 00:00:00' is not a number.*Ts="):
-        gb.load_record_csv(f, u="Power", y="Temp", time="TIMESTAMP")
-
-
 def test_options_that_contradict_the_toa5_format_are_refused(tmp_path):
     f = _write(tmp_path / "t.dat", TOA5_HEAD + TOA5_ROWS)
     for kw, said in ((dict(skiprows=0), "skiprows=0"), (dict(skiprows=2), "skiprows=2"),

@@ -32,6 +32,7 @@ import math
 import os
 import re
 import unicodedata
+from datetime import date, time as dt_time
 from importlib import resources
 from pathlib import Path
 from typing import Callable, Mapping, Sequence
@@ -245,7 +246,8 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
             raise ValueError(f"{p}: line {line} holds text in every column read ({cells}), no sample: if it "
                              "gives the columns' units, pass units_row=True (they become the record's units)")
         for role, i in index.items():
-            values[role].append(_number(p, line, wanted[role], row[i], dec, time=role == "time"))
+            # a time column may hold dates or clock times: its cells are read when the column is whole (_stamps)
+            values[role].append(row[i] if role == "time" else _number(p, line, wanted[role], row[i], dec))
         lines.append(line)
         last = line - first
     if lines and read - last > 1:
@@ -255,7 +257,9 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
                  else "the TOA5 file's four header lines")
         raise ValueError(f"{p}: line {first + 1 + blanks + rows_out}: no data rows after {after}; expected one sample "
                          "per line")
-    out = {role: np.array(v) for role, v in values.items()}
+    out = {role: np.array(v) for role, v in values.items() if role != "time"}
+    if "time" in values:
+        out["time"], out["_stamps"] = _stamps(p, wanted["time"], values["time"], lines, dec)
     out["_lines"] = np.array(lines)
     return out if units is None else out | {"_units": units}
 
@@ -284,7 +288,7 @@ def _refuse_swallowed(p: Path, text: str, row: Sequence[str], start: int, line: 
     """A ``ValueError`` when a quoted cell of the sample on file lines ``line`` to ``end`` (the text's line ``start``
     on) holds lines that read as samples: a quote left open (a note's stray '"') took them in, until a quote
     further on (or the file's end) closed it, and their samples would be lost without a word."""
-    numeric = [j for role, j in index.items() if role != "_stamp"]  # a TOA5 file's TIMESTAMP is read as text
+    numeric = [j for role, j in index.items() if role != "time"]  # a time column may hold dates (a TOA5 TIMESTAMP)
     for i, cell in enumerate(row):
         for piece in cell.splitlines()[1:]:  # a whole line of the file: as many fields as the header, numbers read
             cells = _split(piece, delim)
@@ -386,7 +390,8 @@ def _units_from_row(p: Path, units: tuple[str, str], row: dict[str, str], inputs
                     time: str | None) -> tuple[str, str]:
     """The (input, output) units a units row gives, checked against ``units`` given too; a time column's
     unit must be seconds."""
-    if time is not None and row.get("time", "").lower() not in ("", "s", "sec", "secs", "second", "seconds"):
+    # "TS": a TOA5 file's TIMESTAMP, dates and times
+    if time is not None and row.get("time", "").lower() not in ("", "s", "sec", "secs", "second", "seconds", "ts"):
         raise ValueError(f"{p}: the units row gives the time column the unit {row['time']!r}, but time stamps are "
                          "read as seconds: convert the column to seconds, or leave time= out and give Ts= in seconds")
     said = {row[r] for r in inputs if row[r]}
@@ -782,8 +787,10 @@ def _number(p: Path, line: int, col: str, cell: str, decimal: str, *, time: bool
             hint += (f"; it holds {dash!r} (U+{ord(dash):04X} {unicodedata.name(dash, 'DASH')}), not the ASCII "
                      "minus '-' that numbers are read with: replace it with '-'")
         if time and _CLOCK.search(cell):
-            hint += ("; time stamps are seconds (numbers), not dates or clock times: leave time= out and give the "
-                     "sampling period Ts= (seconds), or convert the column to seconds first")
+            hint += ("; time stamps are read as seconds (numbers), ISO 8601 dates and times (2026-11-20 09:14:03.5) "
+                     "or clock times (09:14:03.5), and a date in another order (20.11.2026, 11/20/2026) does not say "
+                     "which number is the day: convert the column to one of those, or leave time= out and give the "
+                     "sampling period Ts= (seconds)")
         raise ValueError(f"{p}: line {line}, column {col!r}: {cell.strip()!r} is not a number{hint}") from None
     if not math.isfinite(v):
         raise ValueError(f"{p}: line {line}, column {col!r}: {cell.strip()!r} is not a finite number")
@@ -926,20 +933,23 @@ def load_record_csv(
         a line of units, a line of processing codes such as ``Smp``/``Avg``/``Max``, then the
         samples) is read without options: the names from line 2, the record's units from line 3 (as
         ``units_row=True`` reads a units row), line 4 no sample, and messages name the file's own
-        lines; its ``TIMESTAMP`` column holds dates, so give ``Ts`` (``time="TIMESTAMP"`` is
-        refused), and its ``RECORD`` numbers must step by one (records missing from the file or
-        repeated in it are refused naming the lines; a pause of the logger, whose record numbers
-        run on, shows only in ``TIMESTAMP``, which is not read). A binary TOB1/TOB2/TOB3 file is refused: convert it to TOA5 with
+        lines; its ``RECORD`` numbers must step by one (records missing from the file or
+        repeated in it are refused naming the lines); give ``time="TIMESTAMP"`` (or ``Ts``, or both: checked
+        against each other) to have its stamps checked too: a pause of the logger, whose record numbers run on,
+        shows only there. A binary TOB1/TOB2/TOB3 file is refused: convert it to TOA5 with
         CardConvert.
     u : str or sequence of str
         Name of the input column, or of several input columns (``["n1", "n2"]``).
     y : str
         Name of the output column.
     time : str, optional
-        Name of a time-stamp column (seconds, as numbers: dates and clock times such as
-        ``2026-11-20 09:14:03.5`` are refused, and so is a column whose name states another unit,
-        e.g. ``t [ms]``, ``time (min)``, ``t_ms``, or ticks of one, ``Zeit [10ms]``; leave ``time`` out and give
-        ``Ts``). Stamps must
+        Name of a time-stamp column: seconds as numbers (a column whose name states another unit,
+        e.g. ``t [ms]``, ``time (min)``, ``t_ms``, or ticks of one, ``Zeit [10ms]``, is refused), ISO 8601
+        dates and times (``2026-11-20 09:14:03.5``, ``2026-11-20T09:14:03Z``, a TOA5 file's ``TIMESTAMP``; with a
+        UTC offset the elapsed time is read, so a clock change is no jump, while local times without one that jump
+        by an hour are refused as one), or clock times with seconds (``09:14:03.5``, midnight passed read as the
+        next day). Dates in another order (``20.11.2026``, ``11/20/2026``) are refused: leave ``time`` out and
+        give ``Ts``, or convert the column. Stamps must
         increase strictly and evenly: every
         step within ``time_rtol`` × (median step) of the median step (and of what float64 resolves of
         stamps far from zero, e.g. Unix time). The sampling period is the mean step, rounded to 12
@@ -1041,7 +1051,7 @@ def load_record_csv(
     if "_record" in cols:
         _check_record_numbers(p, cols["_record"], lines)
     if time is not None:
-        Ts = _check_time(p, time, cols["time"], lines, Ts, time_rtol)
+        Ts = _check_time(p, time, cols["time"], lines, Ts, time_rtol, cols.get("_stamps"))
     return Record(_inputs(cols, ucols), cols["y"], Ts=float(Ts), name=name or p.stem, units=units, input_names=names)
 
 
@@ -1105,7 +1115,89 @@ _TIME_UNIT = re.compile(rf"(?:[\[(]\s*|[_/ -])({_OTHER_UNITS})\s*[\])]?\s*$"
                         r"\s*[\])]\s*$", re.IGNORECASE)
 
 
-def _check_time(p: Path, col: str, t: np.ndarray, lines: np.ndarray, Ts: float | None, rtol: float) -> float:
+#: An ISO 8601 date and time as loggers, pandas and spreadsheets write them: 2026-11-20 09:14:03.5,
+#: 2026-11-20T09:14:03Z, 2026-11-20 09:14:03.125+01:00 (seconds and their fraction optional; a UTC offset or Z optional)
+_ISO_STAMP = re.compile(r"(\d{4}-\d{2}-\d{2})[T ](\d{2}):(\d{2})(?::(\d{2})(?:[.,](\d+))?)?\s*(Z|[+-]\d{2}(?::?\d{2})?)?")
+#: A clock time without a date, as loggers that write the date in a column of its own: 09:14:03, 09:14:03.5 (its
+#: seconds required: 01:30 may be a stopwatch's minutes and seconds, read as hours and minutes it is 60 times too long)
+_CLOCK_STAMP = re.compile(r"(\d{1,2}):(\d{2}):(\d{2})(?:[.,](\d+))?")
+#: A date in another order (20.11.2026, 11/20/2026): which is the day is not told by the cell
+_OTHER_DATE = re.compile(r"\d{1,4}[./-]\d{1,2}[./-]\d{1,4}")
+
+
+def _stamps(p: Path, col: str, cells: Sequence[str], lines: Sequence[int],
+            decimal: str) -> tuple[np.ndarray, tuple[str, ...] | None]:
+    """A time column's cells as seconds, shape (N,), and the cells as written for messages (None for numbers).
+
+    Numbers are seconds. ISO 8601 dates and times (every cell one: ``2026-11-20 09:14:03.5``, a TOA5 file's
+    ``TIMESTAMP``) are the seconds after the first stamp, the elapsed time where the stamps carry a UTC offset (a
+    clock change then no jump); clock times (``09:14:03.5``; seconds required, as ``01:30`` may be a stopwatch's
+    minutes and seconds) the seconds after the first, a step back of more than 12 hours read as midnight passed. The fraction of a second is read to every digit written (a datetime keeps six).
+    Other forms of dates (``20.11.2026``, ``11/20/2026``: which number is the day the cell does not say) are refused,
+    naming how to pass them."""
+    first = cells[0].strip() if len(cells) else ""
+    iso = _ISO_STAMP.fullmatch(first)
+    if not iso and not _CLOCK_STAMP.fullmatch(first):
+        out = np.empty(len(cells))
+        for k, (line, cell) in enumerate(zip(lines, cells)):
+            out[k] = _number(p, line, col, cell, decimal, time=True)
+        return out, None
+    form = _ISO_STAMP if iso else _CLOCK_STAMP
+    whole = np.empty(len(cells), dtype=np.int64)  # exact whole seconds
+    frac = np.empty(len(cells))  # and their fraction
+    aware = None
+    shown = tuple(c.strip() for c in cells)
+    for k, (line, c) in enumerate(zip(lines, shown)):
+        m = form.fullmatch(c)
+        try:
+            if m is None:
+                raise ValueError
+            if iso:
+                day, h, mi, sec, f, tz = m.groups()
+                days = date.fromisoformat(day).toordinal()
+                if aware is None:
+                    aware = tz is not None
+                elif aware != (tz is not None):
+                    raise ValueError(f"{p}: line {line}, column {col!r}: {c!r} " + (
+                        "has a UTC offset but the stamps before it have none" if aware is False else
+                        f"has no UTC offset but line {lines[0]}'s {shown[0]!r} has one") + ": write every stamp with "
+                        "its offset (or in UTC), or none")
+                shift = 0 if tz in (None, "Z") else (1 if tz[0] == "+" else -1) * (
+                    3600 * int(tz[1:3]) + 60 * int(tz[3:].lstrip(":") or 0))
+            else:
+                h, mi, sec, f = m.groups()
+                days, shift = 0, 0
+            clock = dt_time(int(h), int(mi), int(sec or 0))  # refuses 25:00, 09:61
+            whole[k] = 86400 * days + 3600 * clock.hour + 60 * clock.minute + clock.second - shift
+            frac[k] = float("0." + f) if f else 0.0
+        except ValueError as exc:
+            if str(exc).startswith(str(p)):
+                raise
+            kind = ("an ISO 8601 date and time (2026-11-20 09:14:03.5)" if iso
+                    else "a clock time (09:14:03.5)")
+            raise ValueError(f"{p}: line {line}, column {col!r}: {c!r} is not {kind}, as the column's first stamp "
+                             f"{shown[0]!r} (line {lines[0]}) is") from None
+    t = (whole - whole[0]).astype(float) + (frac - frac[0])
+    if not iso:  # a clock time past midnight starts the next day
+        t += 86400.0 * np.concatenate([[0], np.cumsum(np.diff(t) < -43200)])
+    return t, shown
+
+
+def _local_hour(shown: Sequence[str] | None, i: int) -> bool:
+    """Whether stamp ``i`` as written is an ISO date and time without a UTC offset: local time, which a clock change
+    moves by an hour."""
+    m = None if shown is None else _ISO_STAMP.fullmatch(shown[i])
+    return m is not None and m[6] is None
+
+
+def _check_time(p: Path, col: str, t: np.ndarray, lines: np.ndarray, Ts: float | None, rtol: float,
+                shown: Sequence[str] | None = None) -> float:
+    """The sampling period the stamps ``t`` (seconds, shape (N,)) give, checked (``shown``: the stamps as written,
+    dates or clock times, for the messages)."""
+
+    def at(i: int) -> str:
+        return f"{t[i]:g} s" if shown is None else repr(shown[i])
+
     unit = _TIME_UNIT.search(col)
     if unit:  # read as seconds they would give a sampling period off by 1000 or 60 without a word
         raise ValueError(f"{p}: column {col!r} names its unit {unit.group(1) or unit.group(2)!r}, but time stamps are read as seconds: "
@@ -1120,8 +1212,11 @@ def _check_time(p: Path, col: str, t: np.ndarray, lines: np.ndarray, Ts: float |
         # a file listing the samples newest first (some loggers and exports do) decreases throughout
         order = (": the stamps decrease throughout, so the file lists the samples newest first; sort its rows by "
                  "time, oldest first (e.g. pandas: df.sort_values(time column))") if (dt < 0).all() else ""
-        raise ValueError(f"{p}: column {col!r}: time does not increase from line {lines[i]} ({t[i]:g} s) "
-                         f"to line {lines[i + 1]} ({t[i + 1]:g} s){order}")
+        if not order and _local_hour(shown, i) and abs(dt[i] + 3600 - np.median(dt)) <= 1.0:
+            order = (": an hour back, a clock change (daylight saving time) in local times? Write the stamps in UTC "
+                     "or with their UTC offset (2026-10-25 02:59:59+02:00), or cut the file into two records there")
+        raise ValueError(f"{p}: column {col!r}: time does not increase from line {lines[i]} ({at(i)}) "
+                         f"to line {lines[i + 1]} ({at(i + 1)}){order}")
     # The median step is the reference, so the message points at the odd step (a gap, a jitter),
     # not at the first regular one.
     ref = float(np.median(dt))
@@ -1132,13 +1227,20 @@ def _check_time(p: Path, col: str, t: np.ndarray, lines: np.ndarray, Ts: float |
     if off.any():
         i = int(np.flatnonzero(off)[0])
         n = round(dt[i] / ref)
+        between = f"from line {lines[i]} to line {lines[i + 1]}" + ("" if shown is None else
+                                                                     f" ({at(i)} to {at(i + 1)})")
+        if _local_hour(shown, i) and abs(abs(dt[i] - ref) - 3600) <= max(rtol * ref, 1.0):
+            raise ValueError(f"{p}: column {col!r}: uneven time stamps: step {dt[i]:g} s {between} is the usual "
+                             f"(median) step {ref:g} s {'plus' if dt[i] > ref else 'less'} an hour: a clock change "
+                             "(daylight saving time) in local times? Write the stamps in UTC or with their UTC "
+                             "offset (2026-03-29 01:59:59+01:00), or cut the file into two records there")
         if n >= 2 and abs(dt[i] - n * ref) <= max(rtol, 0.1) * ref:  # a whole number of periods: samples lost
-            raise ValueError(f"{p}: column {col!r}: uneven time stamps: step {dt[i]:g} s from line {lines[i]} to "
-                             f"line {lines[i + 1]} is {n} times the usual (median) step {ref:g} s, a gap of {n - 1} "
+            raise ValueError(f"{p}: column {col!r}: uneven time stamps: step {dt[i]:g} s {between} "
+                             f"is {n} times the usual (median) step {ref:g} s, a gap of {n - 1} "
                              "missing sample(s) (no time_rtol reads it); cut the file into two records at the gap "
                              "(several records of one plant go to the estimators as a list), or fill the gap first")
-        raise ValueError(f"{p}: column {col!r}: uneven time stamps: step {dt[i]:g} s from line {lines[i]} to "
-                         f"line {lines[i + 1]}, but the usual (median) step is {ref:g} s (off by "
+        raise ValueError(f"{p}: column {col!r}: uneven time stamps: step {dt[i]:g} s {between}, "
+                         f"but the usual (median) step is {ref:g} s (off by "
                          f"{abs(dt[i] - ref) / ref:.1e} relative, tolerance {rtol:g}); resample the data to a "
                          "constant period first, or, if the stamps are only rounded (printed with few digits), "
                          "pass a larger time_rtol=")

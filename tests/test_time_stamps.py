@@ -1,0 +1,107 @@
+"""Time columns of dates and times: ISO 8601 stamps, clock times, a TOA5 file's TIMESTAMP (load_record_csv)."""
+
+from __future__ import annotations
+
+from datetime import datetime, timedelta, timezone
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import graybox as gb
+
+TOA5_HEAD = ('"TOA5","CR1000","CR1000","1234","CR1000.Std.32","CPU:x.CR1","1","Table1"\n'
+             '"TIMESTAMP","RECORD","Power","Temp"\n"TS","RN","W","degC"\n"","","Smp","Avg"\n')
+
+
+def _csv(path, stamps, sep=","):
+    path.write_text(f"t{sep}u{sep}y\n" + "".join(f"{s}{sep}{k % 3}{sep}{0.5 * k}\n" for k, s in enumerate(stamps)),
+                    encoding="utf-8")
+    return path
+
+
+@settings(max_examples=25, deadline=None)
+@given(start=st.datetimes(min_value=datetime(1990, 1, 1), max_value=datetime(2090, 1, 1)),
+       ms=st.integers(1, 5000), n=st.integers(2, 30), sep=st.sampled_from(["T", " "]))
+def test_iso_stamps_give_the_period_and_samples_of_the_same_stamps_in_seconds(tmp_path_factory, start, ms, n, sep):
+    """The law: a record read from ISO 8601 stamps is the record read from the same instants as seconds."""
+    d = tmp_path_factory.mktemp("iso")
+    start = start.replace(microsecond=start.microsecond // 1000 * 1000)  # stamps written to the millisecond
+    instants = [start + timedelta(milliseconds=ms * k) for k in range(n)]
+    iso = gb.load_record_csv(_csv(d / "iso.csv", [t.isoformat(sep=sep, timespec="milliseconds") for t in instants]),
+                             u="u", y="y", time="t")
+    secs = gb.load_record_csv(_csv(d / "s.csv", [f"{ms * k / 1000:.3f}" for k in range(n)]), u="u", y="y", time="t")
+    assert iso.Ts == secs.Ts == pytest.approx(ms / 1000, rel=1e-12)
+    np.testing.assert_array_equal(iso.u, secs.u)
+    np.testing.assert_array_equal(iso.y, secs.y)
+
+
+def test_every_fraction_digit_counts_and_utc_offsets_give_elapsed_time(tmp_path):
+    # 100 ns steps: a datetime keeps 6 digits, which would make the steps 0 and 1 µs
+    ns = gb.load_record_csv(_csv(tmp_path / "ns.csv", [f"2026-11-20 09:14:00.{100 * k:09d}" for k in range(8)]),
+                            u="u", y="y", time="t")
+    assert ns.Ts == pytest.approx(1e-7, rel=1e-9)
+    # the spring clock change written with offsets: 01:59:59+01:00 to 03:00:00+02:00 is one second
+    cet, cest = timezone(timedelta(hours=1)), timezone(timedelta(hours=2))
+    instants = [datetime(2026, 3, 29, 0, 59, 58, tzinfo=timezone.utc) + timedelta(seconds=k) for k in range(5)]
+    stamps = [t.astimezone(cest if t.hour >= 1 else cet).isoformat(sep=" ") for t in instants]
+    assert stamps[2].endswith("+01:00") is False and "03:00:00" in stamps[2]
+    rec = gb.load_record_csv(_csv(tmp_path / "dst.csv", stamps), u="u", y="y", time="t")
+    assert rec.Ts == 1.0 and rec.y.size == 5
+    z = gb.load_record_csv(_csv(tmp_path / "z.csv", [t.strftime("%Y-%m-%dT%H:%M:%SZ") for t in instants]),
+                           u="u", y="y", time="t")
+    assert z.Ts == 1.0
+
+
+def test_local_times_over_a_clock_change_are_refused_as_one(tmp_path):
+    spring = ["2026-03-29 01:59:58", "2026-03-29 01:59:59", "2026-03-29 03:00:00", "2026-03-29 03:00:01"]
+    with pytest.raises(ValueError, match=r"line 3 to line 4 \('2026-03-29 01:59:59' to '2026-03-29 03:00:00'\).*"
+                                         r"plus an hour: a clock change \(daylight saving time\).*UTC offset"):
+        gb.load_record_csv(_csv(tmp_path / "spring.csv", spring), u="u", y="y", time="t")
+    autumn = ["2026-10-25 02:59:58", "2026-10-25 02:59:59", "2026-10-25 02:00:00", "2026-10-25 02:00:01"]
+    with pytest.raises(ValueError, match=r"does not increase from line 3.*an hour back, a clock change"):
+        gb.load_record_csv(_csv(tmp_path / "autumn.csv", autumn), u="u", y="y", time="t")
+    with pytest.raises(ValueError, match=r"line 3, column 't': '2026-03-29 01:59:59' has no UTC offset but line "
+                                         r"2's '2026-03-29 01:59:58\+01:00' has one"):
+        gb.load_record_csv(_csv(tmp_path / "mixed.csv", ["2026-03-29 01:59:58+01:00", "2026-03-29 01:59:59"]),
+                           u="u", y="y", time="t")
+    with pytest.raises(ValueError, match=r"line 3, column 't': '2026-03-29T01:59:59Z' has a UTC offset but the "
+                                         "stamps before it have none"):
+        gb.load_record_csv(_csv(tmp_path / "mixed2.csv", ["2026-03-29T01:59:58", "2026-03-29T01:59:59Z"]),
+                           u="u", y="y", time="t")
+
+
+def test_clock_times_pass_midnight_and_need_their_seconds(tmp_path):
+    stamps = ["23:59:58.5", "23:59:59.0", "23:59:59.5", "00:00:00.0", "00:00:00.5"]
+    rec = gb.load_record_csv(_csv(tmp_path / "clock.csv", stamps, sep=";"), u="u", y="y", time="t")
+    assert rec.Ts == 0.5 and rec.y.size == 5
+    # 00:01, 00:02 … may be a stopwatch's minutes and seconds: read as hours and minutes, 60 times too long
+    with pytest.raises(ValueError, match=r"line 2, column 't': '00:01' is not a number.*clock times \(09:14:03.5\)"):
+        gb.load_record_csv(_csv(tmp_path / "mmss.csv", ["00:01", "00:02", "00:03"]), u="u", y="y", time="t")
+    with pytest.raises(ValueError, match=r"line 3, column 't': '25:00:00' is not a clock time.*'23:59:59' \(line 2\)"):
+        gb.load_record_csv(_csv(tmp_path / "bad.csv", ["23:59:59", "25:00:00"]), u="u", y="y", time="t")
+
+
+@pytest.mark.parametrize("stamp", ["20.11.2026 09:14:{:02d}", "11/20/2026 09:14:{:02d}"])
+def test_dates_in_another_order_are_refused_saying_what_is_read(tmp_path, stamp):
+    f = _csv(tmp_path / "d.csv", [stamp.format(k) for k in range(4)])
+    with pytest.raises(ValueError, match=r"line 2, column 't'.*not a number.*ISO 8601.*which number is the day.*Ts="):
+        gb.load_record_csv(f, u="u", y="y", time="t")
+    assert gb.load_record_csv(f, u="u", y="y", Ts=1.0).y.size == 4
+
+
+def test_a_toa5_timestamp_gives_the_period_and_shows_a_pause_of_the_logger(tmp_path):
+    rows = "".join(f'"2026-01-01 00:00:{2 * k:02d}",{k},10.0,20.{k}\n' for k in range(5))
+    f = tmp_path / "t.dat"
+    f.write_bytes((TOA5_HEAD + rows).replace("\n", "\r\n").encode())
+    rec = gb.load_record_csv(f, u="Power", y="Temp", time="TIMESTAMP")
+    assert rec.Ts == 2.0 and rec.units == ("W", "degC") and rec.y.size == 5
+    with pytest.raises(ValueError, match=r"Ts = 1 s disagrees with column 'TIMESTAMP'"):
+        gb.load_record_csv(f, u="Power", y="Temp", time="TIMESTAMP", Ts=1.0)
+    paused = rows.replace('"2026-01-01 00:00:06",3', '"2026-01-01 00:05:06",3').replace(
+        '"2026-01-01 00:00:08",4', '"2026-01-01 00:05:08",4')  # record numbers run on over the pause
+    f.write_bytes((TOA5_HEAD + paused).replace("\n", "\r\n").encode())
+    with pytest.raises(ValueError, match=r"line 7 to line 8 \('2026-01-01 00:00:04' to '2026-01-01 00:05:06'\)"):
+        gb.load_record_csv(f, u="Power", y="Temp", time="TIMESTAMP")
+    assert gb.load_record_csv(f, u="Power", y="Temp", Ts=2.0).y.size == 5  # Ts alone: the stamps unread, as said
