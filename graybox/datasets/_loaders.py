@@ -1117,7 +1117,8 @@ _TIME_UNIT = re.compile(rf"(?:[\[(]\s*|[_/ -])({_OTHER_UNITS})\s*[\])]?\s*$"
 
 #: An ISO 8601 date and time as loggers, pandas and spreadsheets write them: 2026-11-20 09:14:03.5,
 #: 2026-11-20T09:14:03Z, 2026-11-20 09:14:03.125+01:00 (seconds and their fraction optional; a UTC offset or Z optional)
-_ISO_STAMP = re.compile(r"(\d{4}-\d{2}-\d{2})[T ](\d{2}):(\d{2})(?::(\d{2})(?:[.,](\d+))?)?\s*(Z|[+-]\d{2}(?::?\d{2})?)?")
+_ISO_STAMP = re.compile(r"(\d{4}-\d{2}-\d{2})[T ](\d{2}):(\d{2})(?::(\d{2})(?:[.,](\d+))?)?"
+                        r"\s*(Z|[+-]\d{2}(?::?\d{2})?)?")
 #: A clock time without a date, as loggers that write the date in a column of its own: 09:14:03, 09:14:03.5 (its
 #: seconds required: 01:30 may be a stopwatch's minutes and seconds, read as hours and minutes it is 60 times too long)
 _CLOCK_STAMP = re.compile(r"(\d{1,2}):(\d{2}):(\d{2})(?:[.,](\d+))?")
@@ -1132,7 +1133,8 @@ def _stamps(p: Path, col: str, cells: Sequence[str], lines: Sequence[int],
     Numbers are seconds. ISO 8601 dates and times (every cell one: ``2026-11-20 09:14:03.5``, a TOA5 file's
     ``TIMESTAMP``) are the seconds after the first stamp, the elapsed time where the stamps carry a UTC offset (a
     clock change then no jump); clock times (``09:14:03.5``; seconds required, as ``01:30`` may be a stopwatch's
-    minutes and seconds) the seconds after the first, a step back of more than 12 hours read as midnight passed. The fraction of a second is read to every digit written (a datetime keeps six).
+    minutes and seconds) the seconds after the first, a step back of more than 12 hours read as midnight passed.
+    The fraction of a second is read to every digit written (a datetime keeps six).
     Other forms of dates (``20.11.2026``, ``11/20/2026``: which number is the day the cell does not say) are refused,
     naming how to pass them."""
     first = cells[0].strip() if len(cells) else ""
