@@ -105,3 +105,19 @@ def test_a_toa5_timestamp_gives_the_period_and_shows_a_pause_of_the_logger(tmp_p
     with pytest.raises(ValueError, match=r"line 7 to line 8 \('2026-01-01 00:00:04' to '2026-01-01 00:05:06'\)"):
         gb.load_record_csv(f, u="Power", y="Temp", time="TIMESTAMP")
     assert gb.load_record_csv(f, u="Power", y="Temp", Ts=2.0).y.size == 5  # Ts alone: the stamps unread, as said
+
+
+# written to every digit, or as Excel shows a General cell (11 digits: 1e-6 of a day, so 0.01 s steps print as 0)
+@pytest.mark.parametrize("seconds, digits", [(1.0, 15), (1.0, 11), (0.1, 15), (0.1, 11), (0.01, 15), (60.0, 11)])
+def test_a_spreadsheets_serial_dates_are_refused_not_read_as_seconds(tmp_path, digits, seconds):
+    """Days since 1899-12-30 read as seconds gave a sampling period 86,400 times too short, without a word."""
+    first = (datetime(2025, 12, 9, 12) - datetime(1899, 12, 30)) / timedelta(days=1)
+    f = _csv(tmp_path / "xl.csv", [f"{first + k * seconds / 86400:.{digits}g}" for k in range(20)])
+    with pytest.raises(ValueError, match=rf"serial dates.*2025-12-09 12:00:00, a step of {seconds:g} s.*Ts="):
+        gb.load_record_csv(f, u="u", y="y", time="t")
+
+
+@pytest.mark.parametrize("rate", [1e3, 1e4, 5e4, 1e5, 2e5, 1e6])
+def test_seconds_at_the_usual_sampling_rates_are_never_taken_for_serial_dates(tmp_path, rate):
+    f = _csv(tmp_path / "s.csv", [f"{30000 + k / rate:.12f}" for k in range(20)])  # 8 h 20 min into a run
+    assert gb.load_record_csv(f, u="u", y="y", time="t").Ts == pytest.approx(1 / rate, rel=1e-9)

@@ -32,7 +32,7 @@ import math
 import os
 import re
 import unicodedata
-from datetime import date, time as dt_time
+from datetime import date, datetime, timedelta, time as dt_time
 from importlib import resources
 from pathlib import Path
 from typing import Callable, Mapping, Sequence
@@ -1185,6 +1185,33 @@ def _stamps(p: Path, col: str, cells: Sequence[str], lines: Sequence[int],
     return t, shown
 
 
+#: Sampling periods (seconds) a spreadsheet's serial dates step by as a fraction of a day: 1 ms to 1 h, 1-2-5
+_ROUND_PERIODS = np.array([m * 10.0**e for e in range(-3, 4) for m in (1, 2, 5) if m * 10.0**e <= 3600] + [60, 3600])
+
+
+def _refuse_serial_dates(p: Path, col: str, t: np.ndarray) -> None:
+    """A ``ValueError`` when numeric stamps are a spreadsheet's serial dates (days since 1899-12-30, what Excel
+    writes for a date cell formatted as a number: 46000.5 is 2025-12-09 12:00): every stamp a day of the years
+    1954-2201 and the mean step within 5 % of a round period as a fraction of a day (1 s is 1.157e-5),
+    where read as seconds the record's period would be 86,400 times too short without a word. Seconds that look
+    so are sampled at 86.4 kHz / (1, 2, 5 …), a rate no acquisition uses (100 kHz is 0.864 s of a day: 14 % off).
+    The mean step, not the median: a General cell shows 11 digits, 1e-6 of a day, so 0.1 s steps print as 1e-6 or
+    2e-6 (and are uneven), while their mean keeps the period."""
+    ref = (t[-1] - t[0]) / (t.size - 1)
+    if not (t.min() >= 20000 and t.max() < 110000 and 0 < ref < 1):
+        return
+    seconds = ref * 86400
+    near = _ROUND_PERIODS[np.argmin(np.abs(np.log(_ROUND_PERIODS / seconds)))]
+    if abs(seconds / near - 1) > 0.05:
+        return
+    day = datetime(1899, 12, 30) + timedelta(days=float(t[0]))
+    raise ValueError(f"{p}: column {col!r} holds {t[0]:.10g} and steps by {ref:.4g}: a spreadsheet's serial dates "
+                     f"(days since 1899-12-30: {t[0]:.10g} is {day:%Y-%m-%d %H:%M:%S}, a step of {near:g} s), not "
+                     "seconds, which would make the sampling period 86,400 times too short; format the column as "
+                     "dates and times (2026-11-20 09:14:03.5) before saving the file, convert it to seconds "
+                     "(pandas: (x - x[0]) * 86400), or leave time= out and give Ts=")
+
+
 def _local_hour(shown: Sequence[str] | None, i: int) -> bool:
     """Whether stamp ``i`` as written is an ISO date and time without a UTC offset: local time, which a clock change
     moves by an hour."""
@@ -1207,6 +1234,8 @@ def _check_time(p: Path, col: str, t: np.ndarray, lines: np.ndarray, Ts: float |
                          "seconds")
     if t.size < 2:
         raise ValueError(f"{p}: column {col!r} has a single time stamp; the sampling period needs two")
+    if shown is None:  # before the steps are judged: printed with 11 digits, serial dates step unevenly, or by 0
+        _refuse_serial_dates(p, col, t)
     dt = np.diff(t)
     bad = np.flatnonzero(dt <= 0)
     if bad.size:
