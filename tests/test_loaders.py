@@ -481,3 +481,24 @@ def test_a_period_given_beside_the_stamps_is_the_records_period(tmp_path):
         with pytest.raises(ValueError, match="disagrees with column 't'"):
             load_record_csv(path, "u", "y", time="t", Ts=0.06)
     assert periods == [0.05, 0.05]
+
+
+def test_columns_shorter_than_the_file_end_where_their_cells_do(tmp_path):
+    """Two runs exported side by side (Vernier, pandas' to_csv of unequal columns): the second run's columns end
+    before the file does, in empty cells or cut-off lines; they were refused as 'empty cell'."""
+    f = tmp_path / "runs.csv"
+    f.write_text("Run 1: Time (s),Run 1: Temp (C),Run 2: Time (s),Run 2: Temp (C),Run 2: Power (W)\n"
+                 "0,20,0,21,1\n0.5,20.1,0.5,21.2,1\n1,20.3,1,21.5,2\n1.5,20.6,,,\n2,21\n", encoding="utf-8")
+    two = load_record_csv(f, u="Run 2: Power (W)", y="Run 2: Temp (C)", time="Run 2: Time (s)")
+    np.testing.assert_array_equal(two.y, [21.0, 21.2, 21.5])
+    np.testing.assert_array_equal(two.u, [1.0, 1.0, 2.0])
+    assert two.Ts == 0.5
+    one = load_record_csv(f, u="Run 1: Time (s)", y="Run 1: Temp (C)", Ts=0.5)
+    np.testing.assert_array_equal(one.y, [20.0, 20.1, 20.3, 20.6, 21.0])
+    # empty in the middle and samples again after: a gap, refused
+    f.write_text("t,u,y,v\n0,1,2,3\n,,,4\n1,1,2,5\n", encoding="utf-8")
+    with pytest.raises(ValueError, match=r"line 3: the columns read \('u', 'y', 't'\) are empty there but hold "
+                                         r"samples again from line 4: a gap"):
+        load_record_csv(f, u="u", y="y", time="t")
+    with pytest.raises(ValueError, match=r"line 3, column 'y': empty cell"):  # one column of several empty
+        load_record_csv(f, u="v", y="y", Ts=0.5)

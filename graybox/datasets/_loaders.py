@@ -221,6 +221,7 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
     values: dict[str, list[float]] = {role: [] for role in wanted}
     lines: list[int] = []
     read = reader.line_num  # lines read so far: a quoted cell may hold line breaks, so a sample may span lines
+    ended = None  # the line from which every column read is empty
     last = 0  # the text's lines before the last sample
     for row in reader:
         line, read = read + first, reader.line_num  # the line the sample starts on, where its first cells are
@@ -233,6 +234,16 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
                              "list)")
         if read - (line - first) > 1:  # a quoted cell spans lines: it may hold samples a quote left open took in
             _refuse_swallowed(p, text(), row, line - first, line, read + first - 1, header, index, delim, dec)
+        if all(not (row[i].strip() if i < len(row) else "") for i in index.values()):
+            # every column read empty (or cut off) from here: shorter columns beside longer ones (a second run
+            # exported beside a first, Vernier's and pandas' to_csv of columns of unequal length) end here
+            ended = ended or line
+            continue
+        if ended is not None:
+            cols = ", ".join(repr(wanted[r]) for r in index if not r.startswith("_"))
+            raise ValueError(f"{p}: line {ended}: the columns read ({cols}) are empty there but hold samples again "
+                             f"from line {line}: a gap in the record, not its end; fill it, or cut the file into two "
+                             "records there (several records of one plant go to the estimators as a list)")
         if len(row) < need:
             raise ValueError(f"{p}: line {line} has {len(row)} field(s), but column "
                              f"{header[need - 1]!r} is field {need}{_other_delimiter_hint(row, delim)}")
