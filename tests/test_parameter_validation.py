@@ -738,3 +738,13 @@ def test_every_public_dataclass_is_called():
     missing = sorted(k for k, obj in PUBLIC.items()
                      if isinstance(obj, type) and dataclasses.is_dataclass(obj) and k not in CALLS)
     assert not missing, f"public dataclasses this test never builds: {missing}"
+
+
+@pytest.mark.parametrize("call", [lambda p: gb.load_record_csv(p, u="u", y="y", Ts=1.0),
+                                  lambda p: gb.load_static_csv(p, u="u", y="y"),
+                                  lambda p: gb.save(gb.Structure(["y(k-1)"]), p),
+                                  lambda p: gb.load(p)])
+def test_a_file_name_holding_a_nul_character_is_refused_naming_the_argument(tmp_path, call):
+    """The OS's error said only 'embedded null byte', naming neither the argument nor the name."""
+    with pytest.raises(ValueError, match=r"path '.*a\\x00b.csv' holds a NUL character"):
+        call(str(tmp_path / "a\x00b.csv"))

@@ -579,7 +579,8 @@ def check_path(value: object, name: str, *, file: bool = False) -> str | os.Path
 
     Python's own message for ``Path(2.5)`` names neither the option nor what it wanted. ``file``: a file's name,
     where an empty one is a ``ValueError`` (``Path("")`` is the current folder: "Is a directory: '.'"), and so is one
-    ending in a folder separator (``Path("out/")`` is ``out``: a file where the user named a folder).
+    ending in a folder separator (``Path("out/")`` is ``out``: a file where the user named a folder). A name holding
+    a NUL character is a ``ValueError`` naming ``name`` (the OS's says only "embedded null byte").
     """
     if not isinstance(value, (str, os.PathLike)):
         raise TypeError(f"{name} must be a file or folder name (str or path-like), got {value!r} "
@@ -587,6 +588,9 @@ def check_path(value: object, name: str, *, file: bool = False) -> str | os.Path
     if file and not os.fspath(value):
         raise ValueError(f"{name} is empty: give the file's name")
     text = os.fspath(value)
+    if ("\0" if isinstance(text, str) else b"\0") in text:  # the OS's call said only 'embedded null byte'
+        raise ValueError(f"{name} {text!r} holds a NUL character (\\x00), which no file name can: a name read from "
+                         "binary data or a C string?")
     if file and isinstance(text, str) and text.endswith(tuple(s for s in (os.sep, os.altsep, "/") if s)):
         # a folder's name ('results/'): Path drops the separator, and the file was written (or read) as 'results'
         raise ValueError(f"{name} {text!r} ends in a folder separator, so it names a folder, not a file: give a file's "
