@@ -121,3 +121,33 @@ def test_a_spreadsheets_serial_dates_are_refused_not_read_as_seconds(tmp_path, d
 def test_seconds_at_the_usual_sampling_rates_are_never_taken_for_serial_dates(tmp_path, rate):
     f = _csv(tmp_path / "s.csv", [f"{30000 + k / rate:.12f}" for k in range(20)])  # 8 h 20 min into a run
     assert gb.load_record_csv(f, u="u", y="y", time="t").Ts == pytest.approx(1 / rate, rel=1e-9)
+
+
+@pytest.mark.parametrize("year", [1600, 2026, 2300, 9999])
+def test_stamps_of_any_year_are_read_alike(tmp_path, year):
+    """numpy's nanosecond dates hold the years 1678-2261 and wrap others silently (2300 read as 1715)."""
+    f = _csv(tmp_path / "y.csv", [f"{year}-12-31 23:59:{57 + k}.25" for k in range(3)])
+    rec = gb.load_record_csv(f, u="u", y="y", time="t")
+    assert rec.Ts == 1.0 and rec.y.size == 3
+
+
+def test_stamps_written_unalike_are_read_cell_by_cell_and_named(tmp_path):
+    stamps = ["2026-11-20 09:14:00.5", "2026-11-20 09:14:01", "2026-11-20 09:14:01.5", "NaT", "2026-11-20 09:14:02.5"]
+    with pytest.raises(ValueError, match=r"line 5, column 't': 'NaT' is not an ISO 8601 date and time"):
+        gb.load_record_csv(_csv(tmp_path / "a.csv", stamps), u="u", y="y", time="t")
+    stamps[3] = "2026-11-20 09:14:02"
+    assert gb.load_record_csv(_csv(tmp_path / "b.csv", stamps), u="u", y="y", time="t").Ts == 0.5
+
+
+def test_a_quoted_file_reads_as_the_same_file_unquoted(tmp_path):
+    rows = [f'"2026-01-01 00:00:{k:02d}",{k},"{k % 3}.5",{0.25 * k}' for k in range(6)]
+    quoted, plain = tmp_path / "q.csv", tmp_path / "p.csv"
+    quoted.write_text('"t","n","u","y"\n' + "\n".join(rows) + "\n", encoding="utf-8")
+    plain.write_text("t,n,u,y\n" + "\n".join(r.replace('"', "") for r in rows) + "\n", encoding="utf-8")
+    a, b = (gb.load_record_csv(f, u="u", y="y", time="t") for f in (quoted, plain))
+    assert a.Ts == b.Ts == 1.0
+    np.testing.assert_array_equal(a.u, b.u)
+    np.testing.assert_array_equal(a.y, b.y)
+    quoted.write_text('"t","n","u","y"\n' + "\n".join(rows).replace('"2.5"', '2"5') + "\n", encoding="utf-8")
+    with pytest.raises(ValueError, match=r"column 'u'"):  # a quote inside a number is no quoting: never dropped
+        gb.load_record_csv(quoted, u="u", y="y", time="t")
