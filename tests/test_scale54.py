@@ -83,3 +83,14 @@ def test_els_refuses_a_parameter_beyond_the_float_range_in_the_users_units():
         with pytest.raises(ValueError, match=r"ELS: the parameter\(s\) of \['u\(k-1\)\^2'\] are beyond the float range"):
             gb.els(TERMS, gb.Record(u * 1e-200, y), noise=2)
 
+
+
+def test_semp_centred_names_the_datas_own_offsets_where_the_signals_were_scaled():
+    # semp(centre=True) on signals scaled by a power of two (7d9347f) named the scaled signals' means in its stop note:
+    # 'y − 0.436' of an output whose mean is 3.6e180, 'u − 0.32' of an input whose mean is 1.3 (scaled by 1/4 beside it)
+    u, y = _plant()
+    cand = gb.Candidates(2, 2, degree=2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        far = gb.semp(cand, gb.Record(u, y * 1e180), n_terms=4, centre=True)
+    assert f"y − {np.mean(y * 1e180):.6g}" in far.stop and f"u − {np.mean(u):.6g}" in far.stop

@@ -7,6 +7,7 @@ solution back: results do not depend on the units the user chose.
 
 from __future__ import annotations
 
+import math
 from contextlib import AbstractContextManager
 from dataclasses import replace
 from typing import Mapping, Sequence
@@ -20,7 +21,7 @@ from ._terms import Structure, Term
 __all__ = ["column_scales", "scaled_lstsq", "thread_pools", "one_blas_thread", "check_rows", "free_directions",
            "check_identified", "rank_tolerance", "HELD_OUTPUT", "CONSTANT_RTOL", "output_spread", "output_scale",
            "spread_scale", "beyond_float_range", "refuse_beyond_float_range", "binary_scaled", "unscaled_theta",
-           "unscaled_rss", "scaled_norm"]
+           "unscaled_rss", "unscaled_levels", "scaled_norm"]
 
 _CONTROLLER: list[ThreadpoolController] = []
 
@@ -332,6 +333,12 @@ def unscaled_theta(theta: np.ndarray, terms: Sequence[Term], exps: Mapping[str, 
         out = np.ldexp(theta, np.array([exps["y"] - sum(p * exps.get(s, 0) for s, _, p in t.factors) for t in terms],
                                        dtype=int))
     return np.where((theta != 0) & (np.abs(out) < np.finfo(float).tiny), np.nan, out)
+
+
+def unscaled_levels(levels: Mapping[str, float], exps: Mapping[str, int]) -> dict[str, float]:
+    """Signal levels (a centred fit's offsets, by signal name) of the signals times 2^-e (:func:`binary_scaled`) in
+    the data's own units, for what a result says of them."""
+    return {k: math.ldexp(v, exps.get(k, 0)) for k, v in levels.items()}
 
 
 def unscaled_rss(rss: np.ndarray, exps: Mapping[str, int]) -> np.ndarray:

@@ -70,8 +70,8 @@ from ..core._gram import (
     term_factors,
     triangular_factor,
 )
-from ..core._least_squares import (binary_scaled, one_blas_thread, refuse_beyond_float_range, unscaled_rss,
-                                   unscaled_theta)
+from ..core._least_squares import (binary_scaled, one_blas_thread, refuse_beyond_float_range, unscaled_levels,
+                                   unscaled_rss, unscaled_theta)
 from ..core._regressors import check_structure_inputs, record_signals
 from ..core._validation import (Relocked, as_1d_finite, check_bool, check_choice, check_fields, check_int,
                                 check_mean_square, check_real, check_theta, locked, warn)
@@ -881,8 +881,7 @@ def _frols_centred(candidates: Structure, data: object, **options) -> Selection:
         subsets = tuple(_centring.told_apart(_centring.closure(S).process, centred, rank_tol, L)[0]
                         for S in sel.subsets)
         subset_rss = np.array([_centring.least_squares(S, centred, L)[1] for S in subsets])
-    own = {k: math.ldexp(v, exps.get(k, 0)) for k, v in offsets.items()}  # the data's own offsets
-    stop = _centring.stop_note(sel.stop, len(sel.structure), len(full), own, dropped)
+    stop = _centring.stop_note(sel.stop, len(sel.structure), len(full), unscaled_levels(offsets, exps), dropped)
     theta = unscaled_theta(_centring.raw_theta(closed, fit.theta, offsets), list(closed), exps)
     refuse_beyond_float_range(list(closed), theta, prefix="frols: ")
     if exps:  # RSS and the criterion curve in the data's own units (the fit's rows: L on, of each record)

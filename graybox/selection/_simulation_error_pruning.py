@@ -40,7 +40,7 @@ import scipy.linalg
 
 from ..core._gram import triangular_factor
 from ..core._least_squares import (binary_scaled, column_scales, one_blas_thread, output_scale,
-                                   refuse_beyond_float_range, unscaled_theta)
+                                   refuse_beyond_float_range, unscaled_levels, unscaled_theta)
 from ..core._regressors import refuse_non_finite_columns
 from ..core._simulation_kernels import batch_sse, encode, input_products, record_inputs
 from ..models._model import Model, model_input_names
@@ -419,7 +419,8 @@ def _semp_centred(candidates: Structure, data: Record | Sequence[Record] | Datas
         warn(f"the closure of the {len(res.structure)} terms chosen on the centred signals ({len(closed)} terms, "
              "fitted by least squares) diverges in free run on the identification records: its score is inf; take "
              "fewer terms, or centre out", RuntimeWarning)
-    stop = _centring.stop_note(res.stop, len(res.structure), len(full), offsets, dropped)
+    # the offsets in the data's own units (those of the signals times 2^-e said 'y − 0.436' of a mean of 3.6e180)
+    stop = _centring.stop_note(res.stop, len(res.structure), len(full), unscaled_levels(offsets, exps), dropped)
     return _unscaled(replace(res, structure=closed, theta=frozen(_centring.raw_theta(closed, theta, offsets)),
                              score=score, stop=stop), exps)
 
