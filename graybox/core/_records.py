@@ -576,7 +576,7 @@ def check_period(Ts: float | None, what: str, record: Record) -> None:
 
 
 @dataclass(frozen=True, eq=False)
-class Dataset:
+class Dataset(Relocked):
     """A named bundle: identification and validation records plus static points.
 
     The records and the static points must have the same inputs, in the same order, and the
