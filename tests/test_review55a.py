@@ -31,3 +31,16 @@ def test_a_datasets_extra_keeps_its_arrays_locked_through_pickle_and_deepcopy(ho
     for name, a in arrays.items():
         _cannot_be_made_writeable(a, name)
     assert np.array_equal(d2.extra["curve"], [0.0, 1.0, 2.0]) and np.array_equal(d2.extra["map"]["x"], [1.0, 1.0])
+
+
+def test_a_copy_shares_the_locked_arrays_it_cannot_change():
+    """Relocked (2436e7f) copied every array of a value restored by copy.copy, or from a protocol-5 pickle (Dask's),
+    though nothing can make those writeable (read-only over bytes): copy.copy(model) took 4× as long, and a Dask
+    worker's records were copied twice. Such arrays are kept as they come; the value stays locked."""
+    rec = gb.Record(np.linspace(0.0, 1.0, 12), np.linspace(1.0, 2.0, 12), name="r")
+    model = gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0])
+    assert copy.copy(rec).y is rec.y and copy.copy(model).theta is model.theta
+    r5 = pickle.loads(pickle.dumps(rec, protocol=5))
+    for name, a in {"copy.copy Record.y": copy.copy(rec).y, "protocol 5 Record.u": r5.u}.items():
+        _cannot_be_made_writeable(a, name)
+    assert np.array_equal(r5.y, rec.y)

@@ -632,11 +632,22 @@ def locked(a: np.ndarray) -> np.ndarray:
     return np.frombuffer(np.ascontiguousarray(a).tobytes(), dtype=a.dtype).reshape(a.shape)
 
 
+def _is_locked(a: np.ndarray) -> bool:
+    """Whether nothing can make ``a`` writeable: read-only over an immutable ``bytes`` object (as :func:`locked`
+    makes them)."""
+    base = a.base
+    while isinstance(base, np.ndarray):
+        base = base.base
+    return not a.flags.writeable and type(base) is bytes
+
+
 def _relocked(v: object) -> object:
     """``v`` with its arrays :func:`locked` again (in tuples, frozen lists and maps too): how a value restored from a
     pickle or a deep copy gets back what numpy's own pickling and copying drop (they give writeable arrays)."""
     if isinstance(v, np.ndarray):
-        return locked(v)
+        # one locked already (a copy.copy's, or protocol 5's, which gives a read-only array back over bytes) is kept:
+        # copying it again made copy.copy(model) 4× slower, a Dask worker's records a second copy
+        return v if _is_locked(v) else locked(v)
     if isinstance(v, FrozenMap):
         return FrozenMap({k: _relocked(x) for k, x in v._items.items()})
     if isinstance(v, FrozenList):
