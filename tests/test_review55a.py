@@ -44,3 +44,34 @@ def test_a_copy_shares_the_locked_arrays_it_cannot_change():
     for name, a in {"copy.copy Record.y": copy.copy(rec).y, "protocol 5 Record.u": r5.u}.items():
         _cannot_be_made_writeable(a, name)
     assert np.array_equal(r5.y, rec.y)
+
+
+def _bytes_under(a):
+    base = a.base
+    while isinstance(base, np.ndarray):
+        base = base.base
+    return base
+
+
+@pytest.mark.parametrize("protocol", range(pickle.HIGHEST_PROTOCOL + 1))
+def test_values_pickle_and_copy_their_locked_arrays_as_bytes_not_copied_again(protocol, monkeypatch):
+    """Relocked (2436e7f) locked a restored value's arrays by copying each: numpy's own pickling (protocols below 5)
+    and deep copying give an array owning its memory, which could be made writeable again, so pickle.loads of a
+    Record of 24 MB took about ten times as long and copy.deepcopy copied its samples twice. Below protocol 5 the
+    arrays now travel as their bytes, which come back locked as they are (nothing is copied to lock them); a deep copy
+    shares them (no one can change them)."""
+    from graybox.core import _validation
+
+    rng = np.random.default_rng(0)
+    rec = gb.Record(rng.standard_normal((50, 2)), rng.standard_normal(50), input_names=("a", "b"), name="r")
+    data = pickle.dumps(rec, protocol=protocol)
+    copies = []
+    monkeypatch.setattr(_validation, "locked", lambda a: copies.append(a) or _validation.frozen(a, a.dtype))
+    back = pickle.loads(data)
+    deep = copy.deepcopy(rec)
+    monkeypatch.undo()
+    assert copies == []
+    for name, a in {"Record.u": back.u, "Record.y": back.y, "deep copy's Record.y": deep.y}.items():
+        _cannot_be_made_writeable(a, name)
+    assert np.array_equal(back.u, rec.u) and np.array_equal(back.y, rec.y) and back.input_names == ("a", "b")
+    assert _bytes_under(deep.y) is _bytes_under(rec.y) and np.array_equal(deep.u, rec.u)

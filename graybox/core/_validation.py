@@ -635,15 +635,14 @@ def locked(a: np.ndarray) -> np.ndarray:
 def _is_locked(a: np.ndarray) -> bool:
     """Whether nothing can make ``a`` writeable: read-only over an immutable ``bytes`` object (as :func:`locked`
     makes them)."""
-    base = a.base
-    while isinstance(base, np.ndarray):
-        base = base.base
-    return not a.flags.writeable and type(base) is bytes
+    return not a.flags.writeable and _bytes_base(a) is not None
 
 
 def _relocked(v: object) -> object:
     """``v`` with its arrays :func:`locked` again (in tuples, frozen lists and maps too): how a value restored from a
     pickle or a deep copy gets back what numpy's own pickling and copying drop (they give writeable arrays)."""
+    if isinstance(v, _AsBytes):  # copy.copy hands the state over as it was reduced
+        return v.a
     if isinstance(v, np.ndarray):
         # one locked already (a copy.copy's, or protocol 5's, which gives a read-only array back over bytes) is kept:
         # copying it again made copy.copy(model) 4× slower, a Dask worker's records a second copy
@@ -659,18 +658,62 @@ def _relocked(v: object) -> object:
     return v
 
 
+def _array_of_bytes(data: bytes, dtype: str, shape: tuple[int, ...]) -> np.ndarray:
+    """A locked array over ``data`` itself (no copy): how a :class:`Relocked` value's arrays come back."""
+    return np.frombuffer(data, dtype=np.dtype(dtype)).reshape(shape)
+
+
+class _AsBytes:
+    """A locked array in a :class:`Relocked` value's state, pickled (and deep-copied) as its bytes: they come back as
+    a locked array over them, where numpy's own pickling below protocol 5 (and its deep copy) gives a writeable array
+    owning its memory, which locking had to copy again (pickle.loads of a 24 MB Record took ten times as long)."""
+
+    __slots__ = ("a",)
+
+    def __init__(self, a: np.ndarray) -> None:
+        self.a = a
+
+    def __reduce__(self) -> tuple:
+        a, base = self.a, _bytes_base(self.a)
+        # the bytes under a locked array that covers them (a contiguous view of all of them starts at their start)
+        data = base if base is not None and len(base) == a.nbytes and a.flags.c_contiguous else a.tobytes()
+        return _array_of_bytes, (data, a.dtype.str, a.shape)
+
+
+def _bytes_base(a: np.ndarray) -> bytes | None:
+    """The ``bytes`` object under ``a`` (through its bases), or None."""
+    base = a.base
+    while isinstance(base, np.ndarray):
+        base = base.base
+    return base if type(base) is bytes else None
+
+
 class Relocked:
     """A base of the immutable values that hold arrays: restored from a pickle (a process pool, a Dask worker) or by
     ``copy.deepcopy``, their arrays are :func:`locked` again (numpy restores an array writeable, and a frozen
-    dataclass takes its fields back as they come, so ``copy.deepcopy(model).theta[0] = 5`` edited a frozen value)."""
+    dataclass takes its fields back as they come, so ``copy.deepcopy(model).theta[0] = 5`` edited a frozen value).
+    Below pickle's protocol 5 (and in copies) a field that is a locked array travels as its bytes (:class:`_AsBytes`),
+    which come back locked without a copy; protocol 5 pickles a read-only array as bytes itself."""
 
     __slots__ = ()
+
+    def __reduce_ex__(self, protocol: Any) -> Any:
+        rv = super().__reduce_ex__(protocol)
+        if protocol >= 5 or not (isinstance(rv, tuple) and len(rv) > 2 and isinstance(rv[2], dict)):
+            return rv
+        state = {k: _AsBytes(v) if isinstance(v, np.ndarray) and _plain_locked(v) else v for k, v in rv[2].items()}
+        return (*rv[:2], state, *rv[3:])
 
     def __setstate__(self, state: Any) -> None:
         if isinstance(state, tuple):  # (__dict__, __slots__ values) of a class with slots
             state = {**(state[0] or {}), **(state[1] or {})}
         for k, v in state.items():
             object.__setattr__(self, k, _relocked(v))
+
+
+def _plain_locked(a: np.ndarray) -> bool:
+    """A locked array (:func:`_is_locked`) of numbers (or times), whose dtype its text names in full."""
+    return a.dtype.kind in "biufcmM" and _is_locked(a)
 
 
 def frozen(a: object, dtype: type = float) -> np.ndarray:
