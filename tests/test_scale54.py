@@ -86,8 +86,8 @@ def test_els_refuses_a_parameter_beyond_the_float_range_in_the_users_units():
 
 
 def test_semp_centred_names_the_datas_own_offsets_where_the_signals_were_scaled():
-    # semp(centre=True) on signals scaled by a power of two (7d9347f) named the scaled signals' means in its stop note:
-    # 'y − 0.436' of an output whose mean is 3.6e180, 'u − 0.32' of an input whose mean is 1.3 (scaled by 1/4 beside it)
+    # semp(centre=True) on signals scaled by a power of two (7d9347f) named the scaled signals' means in its stop
+    # note: 'y − 0.564541' of an output whose mean is 1.17e180, 'u − 0.650764' of an input whose mean is 1.30 (× 1/2)
     u, y = _plant()
     cand = gb.Candidates(2, 2, degree=2)
     with warnings.catch_warnings():
