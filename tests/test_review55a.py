@@ -2,6 +2,7 @@
 
 import copy
 import pickle
+import re
 
 import numpy as np
 import pytest
@@ -75,3 +76,18 @@ def test_values_pickle_and_copy_their_locked_arrays_as_bytes_not_copied_again(pr
         _cannot_be_made_writeable(a, name)
     assert np.array_equal(back.u, rec.u) and np.array_equal(back.y, rec.y) and back.input_names == ("a", "b")
     assert _bytes_under(deep.y) is _bytes_under(rec.y) and np.array_equal(deep.u, rec.u)
+
+
+def test_a_gap_in_a_toa5_files_large_record_numbers_is_said_with_the_numbers_themselves(tmp_path):
+    """31dcc64 names the RECORD numbers either side of a gap with %g: a logger's record numbers pass a million after
+    twelve days at 1 Hz, and the gap from 1234568 to 1234570 read 'jumps from 1.23457e+06 (line 7) to 1.23457e+06
+    (line 8)', the same number twice; a gap of 2345678 records '2.34568e+06 record(s) missing'."""
+    head = ('"TOA5","st","CR1000","1","os","prog","sig","T1"\n"TIMESTAMP","RECORD","u","y"\n"TS","RN","V","C"\n'
+            '"","","Smp","Smp"\n')
+    for numbers, said in (([1234567, 1234568, 1234570], "jumps from 1234568 (line 6) to 1234570 (line 7): 1 record"),
+                          ([7, 2345686], "jumps from 7 (line 5) to 2345686 (line 6): 2345678 record"),
+                          ([1234568, 1234568], "goes back from 1234568 (line 5) to 1234568 (line 6)")):
+        f = tmp_path / "big.dat"
+        f.write_text(head + "".join(f'"2026-01-01 00:00:0{i}",{r},{i},{2 * i}\n' for i, r in enumerate(numbers)))
+        with pytest.raises(ValueError, match=re.escape(said)):
+            gb.load_record_csv(f, u="u", y="y", Ts=1.0)

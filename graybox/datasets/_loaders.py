@@ -42,6 +42,7 @@ import numpy as np
 
 from ..static._curves import StaticCurve
 from ..core._files import bom_encoding
+from ..core._reprs import exact_text
 from ..core._records import Dataset, Record, StaticPoints, check_same_period, check_units
 from ..core._terms import check_input_names
 from ..core._validation import (check_bool, check_choice, check_int, check_ordered, check_path, check_real,
@@ -1387,9 +1388,14 @@ def _check_record_numbers(p: Path, rec: np.ndarray, lines: np.ndarray) -> None:
         return
     i = int(bad[0])
     a, b = rec[i], rec[i + 1]
-    where = f"from {a:g} (line {lines[i]}) to {b:g} (line {lines[i + 1]})"
+    # the numbers as they are, all their digits (%g said a gap from 1234568 to 1234570 as 'from 1.23457e+06 to
+    # 1.23457e+06'): a logger's record numbers pass a million after twelve days at 1 Hz
+    def text(v: float) -> str:
+        return f"{v:.0f}" if float(v).is_integer() else exact_text(v)
+
+    where = f"from {text(a)} (line {lines[i]}) to {text(b)} (line {lines[i + 1]})"
     if b > a:
-        raise ValueError(f"{p}: column 'RECORD', the TOA5 file's record numbers, jumps {where}: {b - a - 1:g} "
+        raise ValueError(f"{p}: column 'RECORD', the TOA5 file's record numbers, jumps {where}: {text(b - a - 1)} "
                          "record(s) missing from the file (overwritten in the logger's memory before they were "
                          "collected, or lines deleted), so the samples either side are no "
                          "one record at one sampling period; cut the file into two records at the gap (several "
