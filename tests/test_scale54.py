@@ -94,3 +94,43 @@ def test_semp_centred_names_the_datas_own_offsets_where_the_signals_were_scaled(
         warnings.simplefilter("error")
         far = gb.semp(cand, gb.Record(u, y * 1e180), n_terms=4, centre=True)
     assert f"y − {np.mean(y * 1e180):.6g}" in far.stop and f"u − {np.mean(u):.6g}" in far.stop
+
+
+def _two_input_records(ky, ku):
+    out = []
+    for seed in (0, 1):  # two records, two inputs, an offset (the centred path)
+        rng = np.random.default_rng(seed)
+        a = np.repeat(rng.uniform(0.5, 2.0, 16), 10)[:150]
+        b = np.repeat(rng.uniform(-1.0, 1.0, 22), 7)[:150]
+        y, e = np.zeros(150), 0.01 * rng.standard_normal(150)
+        for k in range(2, 150):
+            y[k] = (0.6 * y[k - 1] + 0.2 * a[k - 1] + 0.05 * a[k - 1] ** 2 + 0.1 * b[k - 2] * y[k - 2] + e[k]
+                    + 0.5 * e[k - 1])
+        out.append(gb.Record(np.ldexp(np.column_stack([a, b]), ku), np.ldexp(y + 48.0, ky), input_names=("a", "b")))
+    return out
+
+
+def _powers_of_two(theta, terms, ky, ku):
+    """θ of the same model on y × 2^ky and each input × 2^ku: θ_t × 2^(ky − Σ powers × exponents), exact."""
+    return np.array([np.ldexp(th, ky - sum(p * (ky if s in ("y", "e") else ku) for s, _, p in t.factors))
+                     for th, t in zip(theta, gb.Structure([str(t) for t in terms]))])
+
+
+@pytest.mark.parametrize("ky, ku", [(600, 0), (-700, 3), (2, -500)])
+def test_els_and_frols_are_the_same_fit_bit_for_bit_on_signals_scaled_by_powers_of_two(ky, ku):
+    # the law 7d9347f claims (a power of two is exact): the same θ, MA part and residuals to the last bit, where the
+    # signals are scaled internally (600, -700, -500) and where they are not (2, 3), with several records and inputs
+    terms = ["1", "y(k-1)", "a(k-1)", "a(k-1)^2", "b(k-1)", "y(k-1)b(k-1)"]
+    ns = gb.Structure(["e(k-1)", "e(k-2)", "e(k-1)a(k-1)"])
+    base, far = (gb.els(terms, _two_input_records(*k), noise=ns) for k in ((0, 0), (ky, ku)))
+    assert far.n_iter == base.n_iter > 0
+    assert np.array_equal(far.model.theta, _powers_of_two(base.model.theta, terms, ky, ku))
+    assert np.array_equal(far.model.noise_theta, _powers_of_two(base.model.noise_theta, ns, ky, ku))
+    assert all(np.array_equal(f, np.ldexp(b, ky)) for f, b in zip(far.residuals, base.residuals))
+    cand = gb.Candidates(2, {"a": 2, "b": 2}, degree=2)
+    for centre in (False, True):
+        base, far = (gb.frols(cand, _two_input_records(*k), n_terms=5, centre=centre) for k in ((0, 0), (ky, ku)))
+        assert list(far.structure) == list(base.structure)
+        assert np.array_equal(far.theta, _powers_of_two(base.theta, base.structure, ky, ku))
+        with np.errstate(over="ignore"):  # an RSS beyond the float range in output units² is inf, as y² there
+            assert np.array_equal(far.rss, np.ldexp(base.rss, 2 * ky))
