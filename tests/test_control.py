@@ -460,3 +460,29 @@ def test_a_noise_input_is_not_joined_to_a_loop_error_named_e():
     assert quiet.outputs[0][0] == 0.0 and noisy.outputs[0][0] == 1.0  # e(0) reaches y(0) directly, r does not
     with pytest.raises(ValueError, match="input of that name"):
         gb.narx_iosystem(Model(["y(k-1)", "noise(k-1)"], [0.5, 1.0], input_names=["noise"]), Ts=1.0, noise=True)
+
+
+def test_a_transient_input_is_computed_inside_the_nonlinear_system_from_its_source():
+    # narx_iosystem made u_tau3 a system input of its own: a loop whose controller sets u left it unconnected
+    # (python-control's 'Unused input(s)' warning, then z = 0), so the loop ran without the model's transient effect
+    model = Model(["1", "y(k-1)", "u(k-1)", "u(k-1)^2", "u_tau3(k-2)"], [0.1, 0.6, 0.002, 1e-6, -0.5],
+                  input_names=("u", "u_tau3"), Ts=0.5)
+    sysm = gb.narx_iosystem(model, noise=True)
+    assert sysm.input_labels == ["u", "noise"] and sysm.state_labels == gb.narx_state_names(model, noise=True)
+    u = np.r_[np.full(4, 1000.0), np.full(10, 1100.0), np.full(10, 950.0)]
+    rec = gb.transient_inputs(gb.Record(u=u, y=np.full(u.size, 7.75), Ts=0.5), taus=[3])
+    z = 0.0  # transient_inputs' z(k) = ρ z(k−1) + (1 − ρ)(u(k) − u(k−1))², ρ = exp(−Ts/τ), by hand
+    for k in range(1, u.size):
+        z = np.exp(-0.5 / 3) * z + (1 - np.exp(-0.5 / 3)) * (u[k] - u[k - 1]) ** 2
+        assert rec.input("u_tau3")[k] == pytest.approx(z, rel=1e-12)
+    L = model.max_lag
+    x0 = gb.narx_initial_state(model, rec, noise=True)
+    r = ct.input_output_response(sysm, 0.5 * np.arange(u.size - L), np.vstack([u[L:], np.zeros(u.size - L)]), x0)
+    y = model.simulate(rec)
+    assert np.ptp(y[L:]) > 100  # the transient term moves the output: a run without it would differ
+    np.testing.assert_allclose(r.outputs[0], y[L:], rtol=1e-12, atol=1e-9)
+    # settled, the transient input rests at 0 and the system stays put
+    lm = gb.local_model(model, 1000.0)
+    x = gb.narx_steady_state(model, 1000.0, lm.ybar)
+    r = ct.input_output_response(gb.narx_iosystem(model), 0.5 * np.arange(5), np.full(5, 1000.0), x)
+    np.testing.assert_allclose(r.outputs, lm.ybar, rtol=1e-12)

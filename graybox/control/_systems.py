@@ -16,6 +16,12 @@ closed with any controller without an algebraic loop) and whose update shifts th
 and u(k) at the front. Started from the state the record's first L = max lag samples give
 (:func:`narx_initial_state`) and fed the inputs u(L), u(L+1), …, its outputs are the free run
 y(L), y(L+1), … of :meth:`graybox.Model.simulate`.
+
+A transient input z of input u (:func:`graybox.transient_inputs`, named ``u_tau30`` …) is no
+system input: it is a function of u's changes, z(k) = ρ z(k−1) + (1 − ρ)(u(k) − u(k−1))²,
+ρ = exp(−Ts/τ), so the update computes it from u(k) and the lags z(k−1), u(k−1) the state holds
+(at least one lag of each), as :func:`graybox.transient_inputs` computes it for a record. A
+controller that sets u then drives it, as the plant's own changes did in the records.
 """
 
 from __future__ import annotations
@@ -28,8 +34,8 @@ import numpy as np
 
 from ..core._records import Record, frame_inputs, require_record
 from ..core._simulation import DivergenceError
-from ..core._terms import Structure
-from ..core._transient import steady_levels
+from ..core._terms import Structure, transient_source
+from ..core._transient import _tau_of, steady_levels
 from ..core._validation import check_bool, check_int, check_real, check_str
 from ..models._model import Model
 from ._local import check_Ts, check_polynomial, input_levels, require_control, system_name
@@ -46,12 +52,33 @@ class _Layout:
     E: np.ndarray        # (n_terms, n_states): term t = ∏_j x_j^E[t, j]
     y_rows: np.ndarray   # state indices of y(k-1) … y(k-Ly)
     u_rows: tuple[np.ndarray, ...]
+    fed: tuple[int, ...]  # the inputs the system takes (model order): all but the transient ones
+    transient: tuple[tuple[int, int, float], ...]  # (transient input j, its source input i, τ in s), computed
+
+
+def _transients(inputs: tuple[str, ...]) -> dict[int, tuple[int, float]]:
+    """Transient input j → (its source input i, τ (s)), read from their names as
+    :func:`graybox.core._transient.recomputed_transients` reads them."""
+    out = {}
+    for j, n in enumerate(inputs):
+        source = transient_source(n, inputs)
+        tau = None if source is None else _tau_of(n, source)
+        if tau is not None:
+            out[j] = (inputs.index(source), tau)
+    return out
 
 
 @lru_cache(maxsize=256)
 def _layout(structure: Structure, inputs: tuple[str, ...]) -> _Layout:
     Ly = max((l for t in structure for s, l, _ in t.factors if s == "y"), default=0)
-    Lu = tuple(structure.input_lag(n) for n in inputs)
+    transient = _transients(inputs)
+    lags = [structure.input_lag(n) for n in inputs]
+    # a transient input the structure uses is computed: z(k) needs u(k−1), which the state holds even where F does
+    # not use it; one it does not use is neither fed nor held
+    computed = tuple((j, i, tau) for j, (i, tau) in transient.items() if lags[j])
+    for _, i, _ in computed:
+        lags[i] = max(lags[i], 1)
+    Lu = tuple(lags)
     start = {"y": 0}
     pos = Ly
     for name, L in zip(inputs, Lu):
@@ -63,7 +90,8 @@ def _layout(structure: Structure, inputs: tuple[str, ...]) -> _Layout:
             E[j, start[s] + l - 1] += p
     E.setflags(write=False)
     u_rows = tuple(np.arange(start[n], start[n] + L) for n, L in zip(inputs, Lu))
-    return _Layout(Ly, Lu, E, np.arange(Ly), u_rows)
+    fed = tuple(j for j in range(len(inputs)) if j not in transient)
+    return _Layout(Ly, Lu, E, np.arange(Ly), u_rows, fed, computed)
 
 
 #: The name of the noise input e(k) of :func:`narx_iosystem` with ``noise=True``, and of its lags in the state.
@@ -83,6 +111,9 @@ def _noise_coefficients(model: Model) -> np.ndarray:
 
 def narx_state_names(model: Model, *, noise: bool = False) -> list[str]:
     """The state names of :func:`narx_iosystem`'s system: ``y[k-1]`` … then each input's ``u[k-1]`` …
+
+    (An input with a transient input the model uses has at least its lag ``u[k-1]``: the update computes the
+    transient input from it.)
 
     Parameters
     ----------
@@ -110,8 +141,9 @@ def narx_initial_state(model: Model, record: Record, *, start: int | None = None
     model : Model
         A polynomial NARX model.
     record : Record
-        Measured data with the model's inputs (taken by name), sampled at the model's period (a
-        record at another one is refused, as :meth:`graybox.Model.simulate` refuses it).
+        Measured data with the model's inputs (taken by name; its transient inputs too, as
+        :func:`graybox.transient_inputs` gives them, as for :meth:`graybox.Model.simulate`), sampled at
+        the model's period (a record at another one is refused, as :meth:`graybox.Model.simulate` refuses it).
     start : int, optional
         The sample the system starts at (at least the model's max lag L: the state holds
         y(start−1) … and u(start−1) …; default L, and with ``noise`` the first sample of the
@@ -197,7 +229,9 @@ def narx_iosystem(model: Model, *, Ts: float | None = None, noise: bool = False,
     State, update and output as in the module docstring: the state holds the lagged outputs and
     inputs (:func:`narx_state_names`), the output is the model's one-step map y(k) = F(x(k)) and
     the update shifts y(k) and u(k) in. Every model input is a system input (named after
-    ``model.input_names``); the output is ``"y"``. Connect it with a controller by
+    ``model.input_names``) but its transient inputs (``u_tau30`` …, :func:`graybox.transient_inputs`),
+    which the update computes from their source inputs (module docstring), so that a controller
+    setting u drives them; the output is ``"y"``. Connect it with a controller by
     ``control.interconnect`` and simulate with ``control.input_output_response`` (times
     ``Ts * arange(N)``, initial state from :func:`narx_initial_state` or :func:`narx_steady_state`).
     By default the MA part of a NARMAX model is left out, as in :meth:`graybox.Model.simulate`.
@@ -244,7 +278,12 @@ def narx_iosystem(model: Model, *, Ts: float | None = None, noise: bool = False,
     theta = np.array(model.theta)
     E = lay.E
     n_proc = E.shape[1]  # the process states; the noise lags follow
-    m = model.n_inputs
+    fed = np.array(lay.fed, dtype=np.intp)
+    m = fed.size  # the system's inputs from the model's; the noise input follows
+    # each transient input computed as transient_inputs computes it at this period: (its row z(k−1), its source
+    # input, the source's row u(k−1), ρ = exp(−Ts/τ), 1 − ρ)
+    transient = [(j, lay.u_rows[j][0], i, lay.u_rows[i][0], np.exp(-Ts / tau), -np.expm1(-Ts / tau))
+                 for j, i, tau in lay.transient]
 
     label = name if name is not None else system_name(model.name, "narx")
 
@@ -270,15 +309,19 @@ def narx_iosystem(model: Model, *, Ts: float | None = None, noise: bool = False,
         if lay.Ly:
             new[0] = output(t, x, u, params)[0]
             new[1: lay.Ly] = x[: lay.Ly - 1]
+        v = np.zeros(model.n_inputs)  # every model input at k: those fed, and the transient ones from their sources
+        v[fed] = u[:m]
+        for j, zrow, i, urow, rho, gain in transient:  # z(k) = ρ z(k−1) + (1 − ρ)(u(k) − u(k−1))²
+            v[j] = rho * x[zrow] + gain * (v[i] - x[urow]) ** 2
         for i, rows in enumerate(lay.u_rows):
             if rows.size:
-                new[rows[0]] = u[i]
+                new[rows[0]] = v[i]
                 new[rows[1:]] = x[rows[:-1]]
         if c.size:
             new[n_proc] = u[m]
             new[n_proc + 1:] = x[n_proc:-1]
         return new
 
-    inputs = list(model.input_names) + ([NOISE_INPUT] if noise else [])
+    inputs = [model.input_names[j] for j in lay.fed] + ([NOISE_INPUT] if noise else [])
     return ct.nlsys(update, output, inputs=inputs, outputs=["y"], states=narx_state_names(model, noise=noise),
                     dt=Ts, name=label)
