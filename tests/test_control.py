@@ -486,3 +486,8 @@ def test_a_transient_input_is_computed_inside_the_nonlinear_system_from_its_sour
     x = gb.narx_steady_state(model, 1000.0, lm.ybar)
     r = ct.input_output_response(gb.narx_iosystem(model), 0.5 * np.arange(5), np.full(5, 1000.0), x)
     np.testing.assert_allclose(r.outputs, lm.ybar, rtol=1e-12)
+    # a transient input rests at 0 at every steady state: a state settled at z̄ = 5 is none (the system computes z
+    # from u, and it decays), so it is refused; z̄ = 0 given is the point without it
+    with pytest.raises(ValueError, match=r"u_tau3.*0 at every steady state"):
+        gb.narx_steady_state(model, [1000.0, 5.0], lm.ybar)
+    np.testing.assert_array_equal(gb.narx_steady_state(model, [1000.0, 0.0], lm.ybar), x)

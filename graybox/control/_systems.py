@@ -200,7 +200,8 @@ def narx_steady_state(model: Model, ubar: float | np.ndarray, ybar: float, *, no
     ubar : float or array_like, shape (m,)
         The constant input (input units), one value per input in ``model.input_names`` order (a
         pandas Series labelled by the inputs, e.g. a DataFrame's row, is read by its labels;
-        transient inputs left out are 0, their level at every steady state).
+        transient inputs left out are 0, their level at every steady state, and any other level of one the
+        model uses is refused: :func:`narx_iosystem` computes it, and it decays there).
     ybar : float
         The output level (output units), e.g. :attr:`graybox.LocalModel.ybar` at ū.
     noise : bool
@@ -219,6 +220,11 @@ def narx_steady_state(model: Model, ubar: float | np.ndarray, ybar: float, *, no
         raise ValueError(f"ubar must be {model.n_inputs} finite value(s) {model.input_names}, got {ubar!r}")
     yb = check_real(ybar, "ybar")
     lay = _layout(model.structure, model.input_names)
+    moving = [model.input_names[j] for j, _, _ in lay.transient if ub[j] != 0.0]
+    if moving:  # the system computes them from their inputs' changes: at any other level they decay, nothing settles
+        raise ValueError(f"ubar gives the transient input(s) {', '.join(moving)} a level other than 0, but a transient "
+                         "input is 0 at every steady state (narx_iosystem computes it from its input's changes): leave "
+                         "it out or give 0")
     ne = _noise_coefficients(model).size if noise else 0
     return np.concatenate([np.full(lay.Ly, yb)] + [np.full(L, u) for u, L in zip(ub, lay.Lu)] + [np.zeros(ne)])
 
