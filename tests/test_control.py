@@ -491,3 +491,8 @@ def test_a_transient_input_is_computed_inside_the_nonlinear_system_from_its_sour
     with pytest.raises(ValueError, match=r"u_tau3.*0 at every steady state"):
         gb.narx_steady_state(model, [1000.0, 5.0], lm.ybar)
     np.testing.assert_array_equal(gb.narx_steady_state(model, [1000.0, 0.0], lm.ybar), x)
+    # a record without the transient input: told how to add it, as Model.simulate tells it (it said only 'no input
+    # named 'u_tau3'')
+    plain = gb.Record(u=u, y=np.full(u.size, 7.75), Ts=0.5)
+    with pytest.raises(ValueError, match=r"u_tau3.*transient_inputs\(record, taus=\[3\], input_names=\['u'\]\)"):
+        gb.narx_initial_state(model, plain)

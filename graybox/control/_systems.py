@@ -34,7 +34,7 @@ import numpy as np
 
 from ..core._records import Record, frame_inputs, require_record
 from ..core._simulation import DivergenceError
-from ..core._terms import Structure, transient_source
+from ..core._terms import Structure, require_inputs, transient_source
 from ..core._transient import _tau_of, steady_levels
 from ..core._validation import check_bool, check_int, check_real, check_str
 from ..models._model import Model
@@ -165,6 +165,9 @@ def narx_initial_state(model: Model, record: Record, *, start: int | None = None
     require_record(record)  # a Dataset: told to pass data.ident or data.valid
     model.check_record(record)  # the system runs at the model's period and units: so must the lags it starts from
     lay = _layout(model.structure, model.input_names)
+    # the inputs whose lags the state holds, with Model.simulate's hint for a missing one (a transient input's)
+    require_inputs([n for n, Lu in zip(model.input_names, lay.Lu) if Lu], record.input_names,
+                   "but the record's inputs are", prefix=f"{record.name}: ")
     L = model.max_lag
     if len(record) < L:  # no start has its lags in the record
         raise ValueError(f"{record.name}: the record has {len(record)} samples, fewer than the {L} the state holds (the "
