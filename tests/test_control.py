@@ -496,3 +496,6 @@ def test_a_transient_input_is_computed_inside_the_nonlinear_system_from_its_sour
     plain = gb.Record(u=u, y=np.full(u.size, 7.75), Ts=0.5)
     with pytest.raises(ValueError, match=r"u_tau3.*transient_inputs\(record, taus=\[3\], input_names=\['u'\]\)"):
         gb.narx_initial_state(model, plain)
+    # a step whose square overflows is the run's divergence, said as for any other (not numpy's overflow warning)
+    with pytest.raises(gb.DivergenceError, match="diverged"):
+        ct.input_output_response(sysm, 0.5 * np.arange(5), np.vstack([[1000.0, 1e200, 0, 0, 0], np.zeros(5)]), x0)

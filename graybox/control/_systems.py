@@ -320,8 +320,9 @@ def narx_iosystem(model: Model, *, Ts: float | None = None, noise: bool = False,
             new[1: lay.Ly] = x[: lay.Ly - 1]
         v = np.zeros(model.n_inputs)  # every model input at k: those fed, and the transient ones from their sources
         v[fed] = u[:m]
-        for j, zrow, i, urow, rho, gain in transient:  # z(k) = ρ z(k−1) + (1 − ρ)(u(k) − u(k−1))²
-            v[j] = rho * x[zrow] + gain * (v[i] - x[urow]) ** 2
+        with np.errstate(over="ignore", invalid="ignore"):  # an overflow is the output's DivergenceError, next sample
+            for j, zrow, i, urow, rho, gain in transient:  # z(k) = ρ z(k−1) + (1 − ρ)(u(k) − u(k−1))²
+                v[j] = rho * x[zrow] + gain * (v[i] - x[urow]) ** 2
         for i, rows in enumerate(lay.u_rows):
             if rows.size:
                 new[rows[0]] = v[i]
