@@ -173,3 +173,32 @@ def test_the_free_run_functions_given_a_model_refuse_records_it_does_not_hold_on
     ok = gb.Record(np.ones(10), np.ones(10), Ts=1.0, units=("rpm", "mlc"))
     assert np.array_equal(gb.simulate(m, m.theta, ok), m.simulate(ok))
     assert np.array_equal(gb.simulate(m.structure, m.theta, rec), m.simulate(ok))  # a Structure knows no units
+
+
+def test_a_stable_run_held_by_feedback_through_the_input_is_not_divergence():
+    # the bound's gain counted the terms θ y(k−l) alone: feedback through y·u was not seen, and this plant's run
+    # from rest (at u = 1, y(k) = (1 − 1e-7) y(k−1) + 1e-7 = 1 − (1 − 1e-7)^k, on its way to 1) was called divergent
+    # at sample 1053606
+    m = gb.Model(["y(k-1)", "y(k-1)u(k-1)", "u(k-1)"], [-0.5, 1.5 - 1e-7, 1e-7])
+    u = np.ones(1_100_000)
+    y = m.simulate(u, [0.0])
+    k = np.arange(0, len(u), 1000)
+    np.testing.assert_allclose(y[k], -np.expm1(k * np.log1p(-1e-7)), rtol=1e-6, atol=1e-12)
+    rec = gb.Record(u, y)
+    assert gb.js(m, rec) < 1e-20
+    assert np.array_equal(m.predict(rec, horizon=len(rec)), y)
+    np.testing.assert_allclose(gb.simulate_many(m, m.theta[None, :], rec)[0], y, rtol=1e-9)
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_a_run_diverging_through_the_input_still_stops_early(threads):
+    # feedback 1.1 through y·u at u = 1: y(k) = 1e-6 (1.1^k − 1) passes 1e6 × the push 1e-7 at k = 121
+    m = gb.Model(["y(k-1)", "y(k-1)u(k-1)", "u(k-1)"], [-0.5, 1.6, 1e-7])
+    u = np.ones(400)
+    with pytest.raises(gb.DivergenceError, match=r"at sample 121 "):
+        m.simulate(u, [0.0])
+    y = m.simulate(u, [0.0], on_diverge="nan")
+    runs = gb.simulate_many(m, np.vstack([m.theta] * 3), gb.Record(u, np.zeros(400)), threads=threads)
+    for row in runs:
+        assert np.isfinite(row[:121]).all() and np.isnan(row[121:]).all()
+    np.testing.assert_allclose(runs[0][:121], y[:121], rtol=1e-12)

@@ -94,7 +94,7 @@ def default_bound(y0: np.ndarray, scale: float = 0.0) -> float:
     are 0 only an overflow counts (the largest float). A polynomial model's free run applies the
     same rule sample by sample in its kernel (:func:`~graybox.core._simulation_kernels.simulate_one`),
     its scale the larger of its feedback scale and the level its inputs' push so far holds the output at
-    (:func:`~graybox.core._simulation_kernels.push_gains`).
+    (:func:`~graybox.core._simulation_kernels.push_gain`).
     """
     return float(scaled_bound(max(float(np.max(np.abs(y0), initial=0.0)), float(scale))))
 
@@ -187,10 +187,11 @@ def simulate(
         or return NaN from that sample on.
     bound : float, optional
         Divergence bound on |y|, output units. Default: at each sample k, 1e6 × the largest of
-        max|y0|, G · max_j≤k |X(j)|, X the sum of the terms without y (the inputs' direct push on
-        the output, and the constant) and G the steady gain of the linear output feedback
-        (1 / (1 − Σ θ of the terms θ y(k−l)) where that lies in (0, 1), else 1: the level a
-        constant push holds a stable slow plant at), and the size at which the model's nonlinear
+        max|y0|, max_j≤k G(j) |X(j)|, X the sum of the terms without y (the inputs' direct push on
+        the output, and the constant) and G(j) the steady gain of the linear output feedback at
+        sample j's inputs (1 / (1 − c(j)), c(j) the sum of the coefficients of the single past
+        outputs y(j−l), input-dependent terms θ y(j−l) u(j−i) included, where that lies in (0, 1),
+        else 1: the level a constant push holds a stable slow plant at), and the size at which the model's nonlinear
         output feedback matters (a limit cycle's scale), so it does not depend on the output's
         units, also for a run from rest (y0 = 0).
     input_names : tuple of str, optional

@@ -31,7 +31,7 @@ import numpy as np
 from ._terms import Structure, require_inputs
 
 __all__ = ["Code", "encode", "simulate_one", "simulate_batch", "predict_ahead", "input_products", "record_inputs",
-           "kernel_inputs", "BOUND_FACTOR", "scaled_bound", "feedback_scale", "feedback_scales", "push_gains"]
+           "kernel_inputs", "BOUND_FACTOR", "scaled_bound", "feedback_scale", "feedback_scales", "push_gain"]
 
 
 class Code(NamedTuple):
@@ -247,9 +247,9 @@ def _input_parts(uptr, ulag, upow, usig, grp, theta, uflat, n, k0, mm, X, C, tmp
 
 #: The default divergence bound is this many times the run's own output scale: the largest of
 #: max|y0|, the model's feedback scale (:func:`feedback_scale`) and the level the inputs' direct push
-#: so far holds the output at, G · max_j≤k |X(j)| (X: the terms without y; G the linear feedback's
-#: steady gain, :func:`push_gains`), all in output units, so that it does not depend on the output's
-#: units, also from rest.
+#: so far holds the output at, max_j≤k G(j) |X(j)| (X: the terms without y; G(j) the steady gain of the
+#: linear feedback at sample j's inputs, :func:`push_gain`), all in output units, so that it does not depend
+#: on the output's units, also from rest.
 BOUND_FACTOR = 1e6
 _BIG = np.finfo(np.float64).max  # nothing drives the output yet: only an overflow counts
 
@@ -290,20 +290,20 @@ def feedback_scales(code: Code, thetas: np.ndarray, u: np.ndarray) -> np.ndarray
     return out
 
 
-def push_gains(code: Code, thetas: np.ndarray) -> np.ndarray:
-    """How far the model's linear output feedback amplifies a constant push, per row of ``thetas`` (P, n_terms):
-    1 / D with D = 1 − Σ θ_t over the terms that are one past output alone (θ y(k−l)), where 0 < D < 1; else 1.
-    Shape (P,), dimensionless.
+@nb.njit(cache=True, nogil=True, inline="always")
+def push_gain(feedback):  # pragma: no cover - compiled
+    """How far the linear output feedback at a sample amplifies a constant push: 1 / D with D = 1 − ``feedback``
+    where 0 < D < 1, else 1 (dimensionless).
 
-    A stable linear recursion held by a constant push X settles at X / D: a slow plant sampled fast (two time
-    constants of 1000 samples: D = 1e-6) rests at 10⁶ times its push, which the bound must not call divergence.
-    D <= 0 is a root at z >= 1 (no steady level: the push's own scale is kept, as an unstable recursion's).
+    ``feedback`` is the sum of the coefficients of the single past outputs y(k−l) at that sample, terms θ y(k−l)
+    and input-dependent ones θ y(k−l) · (inputs) alike (C_g(k) of the monomials of output power 1), so the gain is
+    the one the inputs the run sees give it. A stable linear recursion held by a constant push X settles at X / D:
+    a slow plant sampled fast (two time constants of 1000 samples: D = 1e-6) rests at 10⁶ times its push, which the
+    bound must not call divergence. D <= 0 is a root at z >= 1 (no steady level: the push's own scale is kept, as an
+    unstable recursion's, so a diverging run is caught as early as before).
     """
-    th = np.atleast_2d(np.asarray(thetas, dtype=float))
-    lone = [t for t in range(th.shape[1]) if code.ny[t] == 1 and code.uptr[t] == code.uptr[t + 1]]
-    with np.errstate(all="ignore"):
-        d = 1.0 - th[:, lone].sum(axis=1)
-        return np.where((d > 0.0) & (d < 1.0), 1.0 / np.where(d > 0.0, d, 1.0), 1.0)
+    d = 1.0 - feedback
+    return 1.0 / d if 0.0 < d < 1.0 else 1.0
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -316,8 +316,23 @@ def _start_ref(y, start):  # pragma: no cover - compiled
     return ref
 
 
+@nb.njit(cache=True, nogil=True, inline="always")
+def _feedback_margins(C, gny, mm, D):  # pragma: no cover - compiled
+    # D[i] = 1 / push_gain at the samples i < mm: 1 − the sum of the coefficients C_g of the single past outputs
+    # (monomials of output power 1) where that lies in (0, 1), else 1; loops over the samples (vectorised)
+    for i in range(mm):
+        D[i] = 1.0
+    for g in range(gny.shape[0]):
+        if gny[g] == 1:
+            for i in range(mm):
+                D[i] -= C[g, i]
+    for i in range(mm):
+        d = D[i]
+        D[i] = d if 0.0 < d < 1.0 else 1.0
+
+
 @nb.njit(cache=True, nogil=True)
-def _one(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y0, start, bound, auto, scale, gain):  # pragma: no cover - compiled
+def _one(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y0, start, bound, auto, scale):  # pragma: no cover - compiled
     # uflat: the (m, n) inputs flattened, input i at uflat[i*n:(i+1)*n]; 1-D slices of a 1-D
     # array keep the pass-1 loops as the single-input kernel had them (unit stride, vectorised)
     G = gny.shape[0]
@@ -335,11 +350,15 @@ def _one(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y0, start, bo
         mm = min(_CHUNK, n - k0)
         # pass 1, off the recursion's critical path
         _input_parts(uptr, ulag, upow, usig, grp, theta, uflat, n, k0, mm, X, C, tmp)
+        if auto:
+            _feedback_margins(C, gny, mm, tmp)
         # pass 2: the recursion over a few output monomials
         for i in range(mm):
             k = k0 + i
-            if auto and abs(X[i]) * gain > ref:  # off the recursion's critical path
-                ref = abs(X[i]) * gain  # the level the push holds the output at
+            # off the recursion's critical path: the level the push holds the output at, |X| / D, compared as
+            # |X| > ref · D (no division per sample)
+            if auto and abs(X[i]) > ref * tmp[i]:
+                ref = abs(X[i]) / tmp[i]
                 bound = scaled_bound(ref)
             acc = _monomials_step(X, C, gny, gylag, y, i, k)
             if not (abs(acc) <= bound):
@@ -360,9 +379,8 @@ def simulate_one(code: Code, theta: np.ndarray, u: np.ndarray, y0: np.ndarray, s
     """
     uc = kernel_inputs(code, u)
     scale = feedback_scale(code, theta, u) if bound is None else 0.0
-    gain = float(push_gains(code, theta)[0]) if bound is None else 1.0
     return _one(code.uptr, code.ulag, code.upow, code.usig, code.grp, code.gny, code.gylag, theta, uc.reshape(-1),
-                uc.shape[1], y0, start, 0.0 if bound is None else float(bound), bound is None, scale, gain)
+                uc.shape[1], y0, start, 0.0 if bound is None else float(bound), bound is None, scale)
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -381,7 +399,7 @@ def _monomials_step(X, C, gny, gylag, buf, i, j):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True)
-def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, horizon, bound, auto, scale, gain):  # pragma: no cover - compiled
+def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, horizon, bound, auto, scale):  # pragma: no cover - compiled
     # The input-only parts X(k), C_g(k) once over the record; the samples before start + horizon - 1
     # by one free run from the record's start; every later sample t by a recursion of ``horizon``
     # steps from the measured outputs before t - horizon + 1: O(N min(horizon, N - horizon)) steps.
@@ -392,9 +410,12 @@ def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, h
     # the default bound's scale without the run's start: the feedback scale and the push so far
     P = np.full(m, scale)
     ref = scale
+    D = np.empty(m)
+    _feedback_margins(C, gny, m, D)
     for i in range(m):
-        if abs(X[i]) * gain > ref:
-            ref = abs(X[i]) * gain
+        lvl = abs(X[i]) / D[i]
+        if lvl > ref:
+            ref = lvl
         P[i] = ref
     start_ref = _start_ref(y, start)
     out = np.empty(n)
@@ -446,17 +467,17 @@ def predict_ahead(code: Code, theta: np.ndarray, u: np.ndarray, y: np.ndarray, s
     """
     uc = kernel_inputs(code, u)
     scale = feedback_scale(code, theta, u) if bound is None else 0.0
-    gain = float(push_gains(code, theta)[0]) if bound is None else 1.0
     return _ahead(code.uptr, code.ulag, code.upow, code.usig, code.grp, code.gny, code.gylag,
                   np.ascontiguousarray(theta, dtype=np.float64), uc.reshape(-1), uc.shape[1],
                   np.ascontiguousarray(y, dtype=np.float64), start, horizon,
-                  0.0 if bound is None else float(bound), bound is None, scale, gain)
+                  0.0 if bound is None else float(bound), bound is None, scale)
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, bounded):  # pragma: no cover - compiled
+def _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, cacc, bounded):  # pragma: no cover - compiled
     # acc[p] = ŷ_p(k) for every member p, reading past outputs from rows (k - lag) & mask of Y;
-    # when ``bounded`` also xacc[p] = X_p(k), the sum of the terms without y (for the bound).
+    # when ``bounded`` also xacc[p] = X_p(k), the sum of the terms without y, and cacc[p] the sum of the
+    # coefficients of its single past outputs at sample k (for the bound: :func:`push_gain`).
     # The accumulator is a separate array, every access is 2-D indexed and every population
     # loop runs over the whole second axis (range(P) with P = Y.shape[1]): in this form LLVM
     # vectorises each term update, which a loop over a sub-range p0:p1 does not (BENCHMARKS.md).
@@ -467,6 +488,7 @@ def _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, bounded):  # pragma: no co
     if bounded:
         for p in range(P):
             xacc[p] = 0.0
+            cacc[p] = 0.0
     for t in range(nt):
         c = U[k, t]
         m = ny[t]
@@ -481,8 +503,14 @@ def _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, bounded):  # pragma: no co
                     acc[p] += thT[t, p] * c
         elif m == 1:
             a = (k - ylag[t, 0]) & mask
-            for p in range(P):
-                acc[p] += thT[t, p] * c * Y[a, p]
+            if bounded:
+                for p in range(P):
+                    v = thT[t, p] * c
+                    acc[p] += v * Y[a, p]
+                    cacc[p] += v
+            else:
+                for p in range(P):
+                    acc[p] += thT[t, p] * c * Y[a, p]
         elif m == 2:
             a = (k - ylag[t, 0]) & mask
             b = (k - ylag[t, 1]) & mask
@@ -513,14 +541,15 @@ def _bound_start(ref):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def _bound_members(ref, bnd, xacc, acc, gain):  # pragma: no cover - compiled
-    # The default bound of _one for every member p: its scale ref[p] grows with gain[p] |X_p(k)| (xacc, the
-    # sum of its terms without y), and a sample beyond BOUND_FACTOR × that scale is NaN, and so is
-    # every later one, as _one stops there: a stopped member's bound is -1 for good (its NaN need
-    # not reach a later sample, e.g. y(k) = a y(k-2) reads only every other one).
+def _bound_members(ref, bnd, xacc, cacc, acc):  # pragma: no cover - compiled
+    # The default bound of _one for every member p: its scale ref[p] grows with G_p(k) |X_p(k)| (xacc, the
+    # sum of its terms without y; G_p(k) the push_gain of its linear feedback at sample k, cacc[p]), and a
+    # sample beyond BOUND_FACTOR × that scale is NaN, and so is every later one, as _one stops there: a stopped
+    # member's bound is -1 for good (its NaN need not reach a later sample, e.g. y(k) = a y(k-2) reads only every
+    # other one).
     P = acc.shape[0]
     for p in range(P):
-        a = abs(xacc[p]) * gain[p]
+        a = abs(xacc[p]) * push_gain(cacc[p])
         if a > ref[p]:
             ref[p] = a
             bnd[p] = scaled_bound(a)
@@ -531,28 +560,29 @@ def _bound_members(ref, bnd, xacc, acc, gain):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True)
-def _batch_block(thT, U, ny, ylag, Y, start, ref, gain):  # pragma: no cover - compiled
-    # ``ref`` (P,): each member's starting scale, for the default bound; empty: no bound; ``gain`` (P,): push_gains
+def _batch_block(thT, U, ny, ylag, Y, start, ref):  # pragma: no cover - compiled
+    # ``ref`` (P,): each member's starting scale, for the default bound; empty: no bound
     n, P = Y.shape
     mask = -1  # all ones: (k - lag) & mask == k - lag, the whole record is kept
     acc = np.empty(P)
     bounded, ref, bnd = _bound_start(ref)
     xacc = np.empty(P)
+    cacc = np.empty(P)
     for k in range(start, n):
-        _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, bounded)
+        _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, cacc, bounded)
         if bounded:
-            _bound_members(ref, bnd, xacc, acc, gain)
+            _bound_members(ref, bnd, xacc, cacc, acc)
         for p in range(P):
             Y[k, p] = acc[p]
 
 
 @nb.njit(cache=True, parallel=True)
-def _batch_block_parallel(blocks, U, ny, ylag, Y, start, refs, gains):  # pragma: no cover - compiled
+def _batch_block_parallel(blocks, U, ny, ylag, Y, start, refs):  # pragma: no cover - compiled
     # blocks: (n_blocks, T, step); Y: (n_blocks, N, step) with the initial rows filled; refs
     # (n_blocks, step) or (n_blocks, 0). An OpenMP team (see _batch_sse_parallel) rather than a
     # Python thread pool.
     for b in nb.prange(blocks.shape[0]):
-        _batch_block(blocks[b], U, ny, ylag, Y[b], start, refs[b], gains[b])
+        _batch_block(blocks[b], U, ny, ylag, Y[b], start, refs[b])
 
 
 def _blocks(thT: np.ndarray, threads: int) -> np.ndarray:
@@ -607,19 +637,17 @@ def simulate_batch(
     thT = np.ascontiguousarray(thetas.T, dtype=np.float64)
     U = _input_products(code.fptr, code.fsig, code.flag, code.fpow, kernel_inputs(code, u), start)
     ref = _member_scales(code, thetas, u, y0, start, bounded)
-    gain = push_gains(code, thetas) if bounded else np.zeros(0)
     with np.errstate(all="ignore"):
         if threads <= 1 or P < 2 * threads:
             Y = np.empty((n, P))
             Y[:start, :] = y0[:start, None]
-            _batch_block(thT, U, code.ny, code.ylag, Y, start, ref, gain)
+            _batch_block(thT, U, code.ny, code.ylag, Y, start, ref)
             # a transposed view, not a copy: copying 5 MB cost more than the whole batch run
             return Y.T
         blocks = _blocks(thT, int(threads))
         Y = np.empty((blocks.shape[0], n, blocks.shape[2]))
         Y[:, :start, :] = y0[None, :start, None]
-        _batch_block_parallel(blocks, U, code.ny, code.ylag, Y, start, _ref_blocks(ref, blocks),
-                              _ref_blocks(gain, blocks))
+        _batch_block_parallel(blocks, U, code.ny, code.ylag, Y, start, _ref_blocks(ref, blocks))
         return np.concatenate([Yb.T for Yb in Y])[:P]
 
 
@@ -642,7 +670,7 @@ def _ref_blocks(ref: np.ndarray, blocks: np.ndarray) -> np.ndarray:
 
 
 @nb.njit(cache=True, nogil=True)
-def _batch_sse(thT, U, ny, ylag, y, start, ring, ref, gain):  # pragma: no cover - compiled
+def _batch_sse(thT, U, ny, ylag, y, start, ring, ref):  # pragma: no cover - compiled
     # Same update as _batch_block, but the outputs live in a ring buffer of `ring` rows (a
     # power of two > max lag) and only the squared free-run error is kept: the population's
     # working set stays in L1 whatever N is. ``ref`` as for _batch_block.
@@ -657,10 +685,11 @@ def _batch_sse(thT, U, ny, ylag, y, start, ring, ref, gain):  # pragma: no cover
     acc = np.empty(P)
     bounded, ref, bnd = _bound_start(ref)
     xacc = np.empty(P)
+    cacc = np.empty(P)
     for k in range(start, n):
-        _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, bounded)
+        _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, cacc, bounded)
         if bounded:
-            _bound_members(ref, bnd, xacc, acc, gain)
+            _bound_members(ref, bnd, xacc, cacc, acc)
         kk = k & mask
         yk = y[k]
         for p in range(P):
@@ -671,14 +700,14 @@ def _batch_sse(thT, U, ny, ylag, y, start, ring, ref, gain):  # pragma: no cover
 
 
 @nb.njit(cache=True, parallel=True)
-def _batch_sse_parallel(blocks, U, ny, ylag, y, start, ring, refs, gains):  # pragma: no cover - compiled
+def _batch_sse_parallel(blocks, U, ny, ylag, y, start, ring, refs):  # pragma: no cover - compiled
     # blocks: (n_blocks, T, step) contiguous population blocks. An OpenMP team keeps its workers
     # spinning for a moment between calls, so a GA's millisecond calls do not pay for waking an
     # idle core each time (a Python thread pool did not beat one thread for them: BENCHMARKS.md).
     nb_ = blocks.shape[0]
     out = np.empty((nb_, blocks.shape[2]))
     for b in nb.prange(nb_):
-        out[b] = _batch_sse(blocks[b], U, ny, ylag, y, start, ring, refs[b], gains[b])
+        out[b] = _batch_sse(blocks[b], U, ny, ylag, y, start, ring, refs[b])
     return out
 
 
@@ -724,15 +753,14 @@ def batch_sse(
     if U is None:
         U = _input_products(code.fptr, code.fsig, code.flag, code.fpow, kernel_inputs(code, u), start)
     ref = _member_scales(code, np.atleast_2d(np.asarray(thetas, dtype=np.float64)), u, y, start, bounded)
-    gain = push_gains(code, thetas) if bounded else np.zeros(0)
     ring = 1 << int(np.ceil(np.log2(start + 1)))
     with np.errstate(all="ignore"):
         P = thT.shape[1]
         if threads <= 1 or P < 2 * threads:
-            return _batch_sse(thT, U, code.ny, code.ylag, y, start, ring, ref, gain)
+            return _batch_sse(thT, U, code.ny, code.ylag, y, start, ring, ref)
         blocks = _blocks(thT, int(threads))
-        return _batch_sse_parallel(blocks, U, code.ny, code.ylag, y, start, ring, _ref_blocks(ref, blocks),
-                                   _ref_blocks(gain, blocks)).ravel()[:P]
+        return _batch_sse_parallel(blocks, U, code.ny, code.ylag, y, start, ring,
+                                   _ref_blocks(ref, blocks)).ravel()[:P]
 
 
 @nb.njit(cache=True, nogil=True)
