@@ -75,6 +75,24 @@ def test_a_curve_or_surface_refuses_a_level_outside_its_domain_in_any_units():
         surface([[5e-12, 0.5]])
 
 
+@pytest.mark.parametrize("offset", [0.0, 1e3, 1e9, -1e9])
+def test_a_domain_narrow_beside_its_offset_refuses_what_lies_beyond_its_width(offset):
+    # the tolerance at the ends was 1e-9 of the ends' size, not of the domain's width: [1e9, 1e9 + 0.04] took
+    # 1e9 + 0.5 (12 widths past its upper end) as inside; the same domain at 0 refused 0.5
+    lo, hi = offset, offset + 0.04
+    curve = gb.StaticCurve.polynomial([1.0, 2.0], domain=(lo, hi))
+    surface = gb.StaticSurface.polynomial({(0, 0): 1.0, (1, 0): 2.0}, domain=[(lo, hi), (0.0, 1.0)])
+    for beyond in (hi + 0.5, hi + 0.001, lo - 0.001):
+        with pytest.raises(ValueError, match="outside the domain"):
+            curve(beyond)
+        with pytest.raises(ValueError, match="outside the domain"):
+            surface([[beyond, 0.5]])
+    # the ends, and ends off by the round-off of a conversion (two units in their last place), are inside
+    back = np.array([lo, hi]) + 2 * np.spacing(np.array([lo, hi])) * [-1, 1]
+    assert np.isfinite(curve(np.array([lo, hi, *back]))).all()
+    assert np.isfinite(surface(np.column_stack([[lo, hi, *back], [0.5] * 4]))).all()
+
+
 @pytest.mark.parametrize("points", [[1.0, 2.0, 3.0], np.array([1.0, 2.0, 3.0])])
 def test_a_curve_or_surface_refuses_points_that_are_not_static_points_as_a_type_error(points):
     # StaticCurve.fit read points.ubar and failed with AttributeError; StaticSurface.fit with a ValueError

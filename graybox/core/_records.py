@@ -765,11 +765,13 @@ RANGE_MARGIN = 0.05
 def outside_range(u: np.ndarray, lo: np.ndarray | float, hi: np.ndarray | float, margin: float = 0.0) -> np.ndarray:
     """Where ``u`` lies outside [lo, hi] (element-wise, broadcast: per column with per-input bounds).
 
-    The tolerance is relative, 1e-9 of the larger bound's magnitude, so the same in any units, or
-    ``margin`` × (hi − lo) when that is larger.
+    The tolerance is the larger of 1e-9 × (hi − lo), ``margin`` × (hi − lo) and the round-off of the bounds'
+    size (8 units in the last place of the larger magnitude), so the same in any units and at any offset: a
+    fraction of the bounds' size accepted 1e9 + 0.5 in [1e9, 1e9 + 0.04].
     """
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-    tol = np.maximum(1e-9 * np.maximum(np.abs(lo), np.abs(hi)), margin * (hi - lo))
+    width = np.maximum(hi - lo, 0.0)
+    tol = np.maximum(np.maximum(1e-9, margin) * width, 8.0 * np.spacing(np.maximum(np.abs(lo), np.abs(hi))))
     return (u < lo - tol) | (u > hi + tol)
 
 
