@@ -89,6 +89,28 @@ def test_two_values_for_a_one_input_plants_model_with_a_transient_input_are_not_
     assert gb.local_model(model, [1200.0, 0.0]).ybar == gb.local_model(model, 1200.0).ybar  # one point taken
 
 
+def test_a_column_named_as_the_input_is_its_levels_with_a_transient_input():
+    # a named Series (df["u"]: its name the input's, its labels the samples') was read by its values, and two of
+    # them refused as ambiguous (levels of u or one point (u, z̄)), where its name says they are levels of u
+    import pandas as pd
+
+    model = _transient_model()
+    df = pd.DataFrame({"u": [1200.0, 0.0], "p": [1.0, 2.0]})
+    levels = np.array([[1200.0], [0.0]])
+    np.testing.assert_array_equal(model.static_curve(df["u"]), model.static_curve(levels))
+    np.testing.assert_array_equal(model.static_gain(df["u"]), model.static_gain(levels))
+    np.testing.assert_array_equal(gb.operating_curve(model, df["u"]).ybar, gb.operating_curve(model, levels).ybar)
+    assert gb.local_model(model, df["u"].iloc[:1]).ybar == gb.local_model(model, 1200.0).ybar
+    with pytest.raises(ValueError, match="only some of the inputs"):  # levels of the transient input alone: no
+        model.static_curve(pd.Series([0.0, 1.0], name="u_tau3"))
+    with pytest.raises(ValueError, match=r"shape \(M, 1\)"):  # bare values still say nothing of what they are
+        model.static_curve(df["u"].to_numpy())
+    # and two levels of one input of a two-input model were one point (u, v) = (1200, 0): refused, naming v
+    two = gb.Model(["y(k-1)", "u(k-1)", "v(k-1)"], [0.5, 1.0, 1.0])
+    with pytest.raises(ValueError, match=r"inputs without a column: \['v'\]"):
+        two.static_curve(df["u"])
+
+
 @pytest.mark.parametrize("fn", ["cls", "pe"])
 @pytest.mark.parametrize("units", [dict(), dict(u_offset=1e4), dict(u_scale=1e3, y_offset=-1e4)])
 def test_an_equality_the_model_breaks_is_refused_in_any_units(fn, units):

@@ -64,7 +64,8 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
     between would be read by position with some named column landing on another input, or a column
     dropped unseen: ``ValueError`` naming the columns. ``names`` None: the default names
     (``u`` for one column, ``u1 … um`` for m). A pandas Series (one point ū, a DataFrame's row
-    ``df.iloc[k]``) is read so by its index labels. Anything else is returned as it is. ``output``:
+    ``df.iloc[k]``) is read so by its index labels; one named as an input whose labels are none (a column,
+    ``df["speed"]``) is that input's samples or levels, read as the one-column DataFrame it came from. Anything else is returned as it is. ``output``:
     the output as a named Series (:func:`output_series`), whose column (its name, its samples) no
     input may be: neither a column of ``x`` nor ``x`` itself. ``steady``: ``x`` is steady-state levels, where the
     transient inputs among ``names`` rest at 0 and may be left out (:func:`~graybox.core._transient.steady_levels`
@@ -90,6 +91,10 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
                              "as Ts=)")
     expected = tuple(default_input_names(len(cols)) if names is None else names)
     hits = [c for c in labels if c in expected]
+    if series and not hits and isinstance(getattr(x, "name", None), str) and x.name in expected:
+        # a column of a frame (df["speed"]): its name is the input's, its labels the samples'; read as the
+        # one-column frame it came from, by name (its values are that input's levels, never one point)
+        return frame_inputs(x.to_frame(), names, name, output, steady=steady)
     if not hits:
         return x
     if len(labels) == len(expected) and sorted(labels) == sorted(expected):
