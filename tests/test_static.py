@@ -319,3 +319,55 @@ def test_one_relative_threshold_for_a_vanishing_denominator():
             rational_static_curve(s, mu.theta, [1000.0 * cu])
         assert mu.equilibria(1000.0 * cu) == []
     assert DENOMINATOR_RTOL == 1e-9
+
+
+def _slow_first_order(eps=5.2e-6, g=0.01):
+    """y(k) = (1 − ε) y(k−1) − ε g y(k−1)² + ε u(k−1): ȳ + g ȳ² = ū, a time constant near 1/ε samples."""
+    return Model(["y(k-1)", "y(k-1)^2", "u(k-1)"], [1 - eps, -eps * g, eps])
+
+
+def test_a_first_order_run_proven_to_settle_is_not_run(monkeypatch):
+    # static_curve(y0=…) ran every level's free run to its end: 200 levels of a plant with τ ≈ 1.9e5 samples took
+    # seconds (runs of ~10⁶ steps each). Where the map y ↦ f(y) contracts at a proven rate on the interval the run
+    # stays in (|f'| < 1 about the root), the run's end is known before it starts: the same root, no run
+    import graybox.static._analysis as an
+
+    runs = []
+    real = an.settle_runs
+    monkeypatch.setattr(an, "settle_runs", lambda *a, **k: runs.append(a[3].size) or real(*a, **k))
+    m = _slow_first_order()
+    ub = np.linspace(0.5, 10.0, 200)
+    exact = (np.sqrt(1 + 0.04 * ub) - 1) / 0.02
+    alone = m.static_curve(ub)  # the one stable root (θ = 1 − ε rounded: 1e-11 off the exact one)
+    np.testing.assert_allclose(alone, exact, rtol=1e-9)
+    for y0 in (0.0, 2.0 * exact, exact[::-1]):
+        np.testing.assert_array_equal(m.static_curve(ub, y0=y0), alone)
+    assert sum(runs) == 0
+    # a start beyond the basin (the unstable root at ȳ = −100 − ȳ_stable) still runs, and diverges, as before
+    with pytest.raises(ValueError, match="diverged"):
+        m.static_curve([1.0], y0=-150.0)
+    assert sum(runs) > 0
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.floats(-1.0, 1.0), min_size=4, max_size=4), st.floats(-3.0, 3.0),
+       st.lists(st.floats(-20.0, 20.0), min_size=3, max_size=3), st.integers(-3, 3))
+def test_property_a_run_proven_to_settle_ends_as_its_run_does(c, ubar, y0, e):
+    # the proof (a contraction at a proven rate onto the nearest root) only skips runs: with it and without it
+    # every level reaches the same equilibrium, or fails for the same reason, in any units (10^e)
+    import graybox.static._analysis as an
+
+    s = 10.0 ** e
+    st_ = Structure(["1", "y(k-1)", "y(k-1)^2", "y(k-1)^3", "u(k-1)"])
+    theta = np.array([c[0] * s, c[1], c[2] / s, c[3] / s ** 2 * 0.1, 0.5])
+    ub = np.array([ubar * s, 0.5 * ubar * s, 0.0])
+    y0s = np.array(y0) * s
+    proven = an.reached_equilibria(st_, theta[None, :], ub, y0s)
+    real = an._contracting_runs
+    try:
+        an._contracting_runs = lambda *a: (np.zeros(a[2].size, dtype=bool), np.full(a[2].size, np.nan))
+        ran = an.reached_equilibria(st_, theta[None, :], ub, y0s)
+    finally:
+        an._contracting_runs = real
+    np.testing.assert_array_equal(proven.status, ran.status)
+    np.testing.assert_array_equal(proven.ybar, ran.ybar)

@@ -32,7 +32,9 @@ started exactly on it.
   method on eq. (5) lands on one; it is stopped as diverged when |y| exceeds 10⁶ times the scale of
   the point, and as not settled after ``SETTLE_STEPS`` steps, or, when a stable root it may be
   heading for is slow, after ``SETTLE_TAUS`` time constants of the slowest (a slow plant sampled
-  fast is judged as it is sampled slowly), unless that exceeds ``SETTLE_MAX_STEPS`` steps.
+  fast is judged as it is sampled slowly), unless that exceeds ``SETTLE_MAX_STEPS`` steps. A first-order
+  run whose map contracts at a proven rate onto its nearest root, within that budget, is not run: its end is
+  known (:func:`_contracting_runs`), the same as running it gives.
 
 Units do not matter: the roots are computed with the variable ȳ scaled by a power of two that
 balances the polynomial's extreme coefficients (degree >= 4: each group of roots of similar size in
@@ -976,7 +978,9 @@ def settle(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, roots: np.
     slowest stable equilibrium (:func:`settle_budget`), where it also ends once its distance to an
     equilibrium shrinks at that equilibrium's own rate (the geometric test); see
     :func:`graybox.static._equilibrium_kernels.settle_runs`, whose docstring gives ``kind``, ``ip``
-    and ``fp``. Pairs with no stable equilibrium are not run: they settle on none.
+    and ``fp``. Pairs with no stable equilibrium are not run: they settle on none; nor are first-order runs
+    (``L`` = 1) proven to reach their nearest candidate within their budget (:func:`_contracting_runs`; without
+    ``members``).
 
     Parameters
     ----------
@@ -1019,6 +1023,13 @@ def settle(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, roots: np.
     run = ncand > 0
     ybar = np.full(y0a.shape, np.nan)
     status = np.full(y0a.shape, NONE_STABLE, dtype=np.int8)
+    if kind == POLY and max(int(L), 1) == 1 and members is None and run.any():
+        # a run whose end is proven before it starts (a contraction onto its nearest root) is not run
+        idx = np.flatnonzero(run)
+        known, root = _contracting_runs(ip, fp[idx], y0a[idx], cand[idx], ncand[idx], tol[idx])
+        ybar[idx[known]] = root[known]
+        status[idx[known]] = REACHED
+        run[idx[known]] = False
     groups = None
     if members is not None:
         groups = np.ascontiguousarray(members, dtype=np.int64)
@@ -1072,6 +1083,73 @@ def _settle_longer(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, ca
             np.ascontiguousarray(cand[sel]), ncand[sel], np.ascontiguousarray(tol[sel]),
             np.ascontiguousarray(ntol[sel]), L, floor, 0, budget[longer] - SETTLE_STEPS, hist, STALL_RTOL,
             np.ascontiguousarray(lograte[longer]), *grp)
+
+
+def _contracting_runs(ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, cand: np.ndarray, ncand: np.ndarray,
+                      tol: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Which first-order runs :func:`settle` would see reach their nearest candidate, proven without running them;
+    and that candidate. Shapes as :func:`settle`'s (K pairs); returns bool (K,) and float (K,).
+
+    The recursion reads y(k−1) alone: the run is y ↦ f(y) = X + Σ_g C_g y^(m_g) in floating point. Around the
+    candidate r nearest y0 (d0 = |y0 − r| > its tolerance), on [r − R, r + R] with R = 1.5 d0 + tol, |f'| <= ρ < 1
+    (bounded by the Taylor expansion of f' at r): f contracts that interval onto its one fixed point r*, within e_r
+    = (|F(r)| + 2δ) / (1 − ρ) of r, δ a bound on one step's rounding; the run stays in it and lies within
+    ρ^k (d0 + e_r) + δ / (1 − ρ) + e_r of r after k steps. Proven where that is below tol in k steps the run's
+    budget holds (SETTLE_STEPS, or the longer budget :func:`settle_budget` gives it), every other candidate lies
+    beyond 2.5 R (none is ever the nearest, so no test of the run measures against another), and e_r, δ / (1 − ρ)
+    are at most tol / 8: the run's own checks then end it REACHED at r, as running it would, only sooner.
+    """
+    K, C = cand.shape
+    out = np.zeros(K, dtype=bool)
+    G = int(ip[0])
+    pw = np.asarray(ip[2:2 + G], dtype=np.int64)
+    if K == 0 or C == 0:
+        return out, np.full(K, np.nan)
+    deg = int(pw.max(initial=1))
+    poly = np.zeros((K, deg + 1))  # f's coefficients in powers of y
+    poly[:, 0] = fp[:, 0]
+    for g in range(G):
+        poly[:, pw[g]] += fp[:, 1 + g]
+    valid = np.arange(C)[None, :] < ncand[:, None]
+    rows = np.arange(K)
+    with np.errstate(all="ignore"):
+        dist = np.where(valid, np.abs(cand - y0[:, None]), np.inf)
+        j = np.argmin(dist, axis=1)
+        r, d0, tl = cand[rows, j], dist[rows, j], tol[rows, j]
+        other = np.where(valid & (np.arange(C)[None, :] != j[:, None]), np.abs(cand - r[:, None]), np.inf).min(axis=1)
+        R = 1.5 * d0 + tl
+        Y = np.abs(r) + R
+        p = np.arange(deg + 1)
+        # T[:, i] = f^(i)(r) / i!, the Taylor coefficients of f at r
+        T = np.stack([np.sum(poly[:, i:] * np.array([float(_comb(q, i)) for q in range(i, deg + 1)])
+                             * r[:, None] ** (p[i:] - i), axis=1) for i in range(deg + 1)], axis=1)
+        eps = np.finfo(float).eps
+        dsize = np.sum(np.abs(poly[:, 1:]) * p[1:] * Y[:, None] ** (p[1:] - 1), axis=1)
+        rho = np.abs(T[:, 1]) + 8 * (deg + 1) * eps * dsize
+        for i in range(2, deg + 1):
+            rho = rho + i * np.abs(T[:, i]) * R ** (i - 1)
+        size = np.abs(fp[:, 0]) + sum(np.abs(fp[:, 1 + g]) * Y ** pw[g] for g in range(G))
+        delta = 4 * (deg + G + 2) * eps * size
+        gap = 1.0 - rho
+        F = fp[:, 0] + sum(fp[:, 1 + g] * r ** pw[g] for g in range(G)) - r
+        e_r = (np.abs(F) + 2 * delta) / gap
+        steps = np.ceil(np.log((d0 + e_r) / (tl / 2)) / -np.log1p(-gap)) + 2
+        ok = ((ncand > 0) & (d0 > tl) & (gap > 0) & (e_r <= tl / 8) & (delta / gap <= tl / 8) & (other > 2.5 * R)
+              & np.isfinite(steps) & np.isfinite(Y) & np.isfinite(size))
+    allowed = np.full(K, SETTLE_STEPS, dtype=np.int64)
+    longer = ok & (steps > SETTLE_STEPS)
+    if longer.any():  # the longer budget of a run the first pass leaves not settled (_settle_longer)
+        budget, _ = settle_budget(POLY, ip, fp[longer], cand[longer], ncand[longer], 1)
+        allowed[longer] = np.where(budget <= SETTLE_MAX_STEPS, budget, SETTLE_STEPS)
+    out = ok & (steps <= allowed)
+    return out, r
+
+
+@lru_cache(maxsize=None)
+def _comb(n: int, k: int) -> int:
+    from math import comb
+
+    return comb(n, k)
 
 
 #: No per-pair budgets, no earlier runs to go on from: the first pass of :func:`settle`.
