@@ -32,9 +32,9 @@ started exactly on it.
   method on eq. (5) lands on one; it is stopped as diverged when |y| exceeds 10⁶ times the scale of
   the point, and as not settled after ``SETTLE_STEPS`` steps, or, when a stable root it may be
   heading for is slow, after ``SETTLE_TAUS`` time constants of the slowest (a slow plant sampled
-  fast is judged as it is sampled slowly), unless that exceeds ``SETTLE_MAX_STEPS`` steps. A first-order
-  run whose map contracts at a proven rate onto its nearest root, within that budget, is not run: its end is
-  known (:func:`_contracting_runs`), the same as running it gives.
+  fast is judged as it is sampled slowly), unless that exceeds ``SETTLE_MAX_STEPS`` steps. A run left
+  unsettled by ``SETTLE_STEPS`` and proven to contract onto its nearest root within its budget is not run on: its
+  end is known (:func:`_contracting_runs`), the same as running it on gives.
 
 Units do not matter: the roots are computed with the variable ȳ scaled by a power of two that
 balances the polynomial's extreme coefficients (degree >= 4: each group of roots of similar size in
@@ -978,9 +978,9 @@ def settle(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, roots: np.
     slowest stable equilibrium (:func:`settle_budget`), where it also ends once its distance to an
     equilibrium shrinks at that equilibrium's own rate (the geometric test); see
     :func:`graybox.static._equilibrium_kernels.settle_runs`, whose docstring gives ``kind``, ``ip``
-    and ``fp``. Pairs with no stable equilibrium are not run: they settle on none; nor are first-order runs
-    (``L`` = 1) proven to reach their nearest candidate within their budget (:func:`_contracting_runs`; without
-    ``members``).
+    and ``fp``. Pairs with no stable equilibrium are not run: they settle on none; nor are polynomial runs
+    run on past ``SETTLE_STEPS`` where they are proven to reach their nearest candidate within their budget
+    (:func:`_contracting_runs`; without ``members``).
 
     Parameters
     ----------
@@ -1023,13 +1023,6 @@ def settle(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, roots: np.
     run = ncand > 0
     ybar = np.full(y0a.shape, np.nan)
     status = np.full(y0a.shape, NONE_STABLE, dtype=np.int8)
-    if kind == POLY and max(int(L), 1) == 1 and members is None and run.any():
-        # a run whose end is proven before it starts (a contraction onto its nearest root) is not run
-        idx = np.flatnonzero(run)
-        known, root = _contracting_runs(ip, fp[idx], y0a[idx], cand[idx], ncand[idx], tol[idx])
-        ybar[idx[known]] = root[known]
-        status[idx[known]] = REACHED
-        run[idx[known]] = False
     groups = None
     if members is not None:
         groups = np.ascontiguousarray(members, dtype=np.int64)
@@ -1077,79 +1070,120 @@ def _settle_longer(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, ca
         return
     sel = again[longer]
     hist = np.ascontiguousarray(last[np.searchsorted(np.flatnonzero(run), sel)])
+    left = budget[longer] - SETTLE_STEPS
+    lograte = lograte[longer]
+    if kind == POLY and groups is None:
+        # a run whose end is proven from where it is (a contraction onto its nearest root) is not run on
+        known, root = _contracting_runs(ip, fp[sel], y0[sel], hist, cand[sel], ncand[sel], tol[sel], L, left)
+        ybar[sel[known]] = root[known]
+        status[sel[known]] = REACHED
+        sel, hist, left, lograte = sel[~known], hist[~known], left[~known], lograte[~known]
+        if not sel.size:
+            return
     with np.errstate(all="ignore"):
         ybar[sel], status[sel], _, _ = settle_runs(
             kind, ip, np.ascontiguousarray(fp[sel], dtype=float), np.ascontiguousarray(y0[sel]),
             np.ascontiguousarray(cand[sel]), ncand[sel], np.ascontiguousarray(tol[sel]),
-            np.ascontiguousarray(ntol[sel]), L, floor, 0, budget[longer] - SETTLE_STEPS, hist, STALL_RTOL,
-            np.ascontiguousarray(lograte[longer]), *grp)
+            np.ascontiguousarray(ntol[sel]), L, floor, 0, np.ascontiguousarray(left), np.ascontiguousarray(hist),
+            STALL_RTOL, np.ascontiguousarray(lograte), *grp)
 
 
-def _contracting_runs(ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, cand: np.ndarray, ncand: np.ndarray,
-                      tol: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Which first-order runs :func:`settle` would see reach their nearest candidate, proven without running them;
-    and that candidate. Shapes as :func:`settle`'s (K pairs); returns bool (K,) and float (K,).
+def _contracting_runs(ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, hist: np.ndarray, cand: np.ndarray,
+                      ncand: np.ndarray, tol: np.ndarray, L: int, steps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Which polynomial runs :func:`settle`'s first pass left unsettled reach their nearest candidate within
+    ``steps`` (K,) more steps from where they are (``hist`` (K, L), their last L outputs, oldest first), proven
+    without running them on; and that candidate. Other shapes as :func:`settle`'s; returns bool (K,), float (K,).
 
-    The recursion reads y(k−1) alone: the run is y ↦ f(y) = X + Σ_g C_g y^(m_g) in floating point. Around the
-    candidate r nearest y0 (d0 = |y0 − r| > its tolerance), on [r − R, r + R] with R = 1.5 d0 + tol, |f'| <= ρ < 1
-    (bounded by the Taylor expansion of f' at r): f contracts that interval onto its one fixed point r*, within e_r
-    = (|F(r)| + 2δ) / (1 − ρ) of r, δ a bound on one step's rounding; the run stays in it and lies within
-    ρ^k (d0 + e_r) + δ / (1 − ρ) + e_r of r after k steps. Proven where that is below tol in k steps the run's
-    budget holds (SETTLE_STEPS, or the longer budget :func:`settle_budget` gives it), every other candidate lies
-    beyond 2.5 R (none is ever the nearest, so no test of the run measures against another), and e_r, δ / (1 − ρ)
-    are at most tol / 8: the run's own checks then end it REACHED at r, as running it would, only sooner.
+    About the candidate r nearest the last output the run's errors e(k) = y(k) − r obey
+    e(k) = Σ_l a_l e(k−l) + h(e) + c: a the recursion linearised at r (companion matrix A), h the rest of the
+    polynomial, c = F(r) plus one step's rounding (at most δ). In the coordinates z = W e of A's eigenvectors (W ≈
+    V⁻¹; ‖W⁻¹‖ bounded through ‖I − W V‖) the state contracts by ρ = ‖W A W⁻¹‖ + ‖W e₁‖ S(R) ‖W⁻¹‖ per step while
+    every output lies within R of r, S(R) bounding how far the partials move there. Proven where ρ < 1, the state
+    (z₀ = W e of the last L errors) stays within R, its error after k steps, ‖W⁻¹‖ (ρ^k ‖z₀‖ + ‖W e₁‖ |c| / (1 − ρ)),
+    is below tol at a step within ``steps``, every other candidate lies beyond 2.5 R (none is ever the nearest,
+    so no test of the run measures against another), and the run never meets the divergence bound: its own
+    checks then end it REACHED at r, as running it on would, only sooner.
     """
     K, C = cand.shape
-    out = np.zeros(K, dtype=bool)
+    r_out = np.full(K, np.nan)
+    ip = np.ascontiguousarray(ip, dtype=np.int64)
     G = int(ip[0])
+    L = max(int(L), 1)
     pw = np.asarray(ip[2:2 + G], dtype=np.int64)
     if K == 0 or C == 0:
-        return out, np.full(K, np.nan)
-    deg = int(pw.max(initial=1))
-    poly = np.zeros((K, deg + 1))  # f's coefficients in powers of y
-    poly[:, 0] = fp[:, 0]
-    for g in range(G):
-        poly[:, pw[g]] += fp[:, 1 + g]
+        return np.zeros(K, dtype=bool), r_out
     valid = np.arange(C)[None, :] < ncand[:, None]
     rows = np.arange(K)
+    eps = np.finfo(float).eps
     with np.errstate(all="ignore"):
-        dist = np.where(valid, np.abs(cand - y0[:, None]), np.inf)
+        dist = np.where(valid, np.abs(cand - hist[:, -1:]), np.inf)  # the resumed run's first goal
         j = np.argmin(dist, axis=1)
-        r, d0, tl = cand[rows, j], dist[rows, j], tol[rows, j]
+        r, tl = cand[rows, j], tol[rows, j]
         other = np.where(valid & (np.arange(C)[None, :] != j[:, None]), np.abs(cand - r[:, None]), np.inf).min(axis=1)
-        R = 1.5 * d0 + tl
+        a = candidate_linearisations(POLY, ip, np.ascontiguousarray(fp, dtype=float),
+                                     np.ascontiguousarray(r[:, None]), np.ones(K, dtype=np.int64), L)[:, 0, :]
+        A = np.zeros((K, L, L))
+        A[:, 0, :] = np.where(np.isfinite(a), a, 0.0)
+        A[:, np.arange(1, L), np.arange(L - 1)] = 1.0
+        V, W, fine = _eigenbases(A)
+        inf_norm = lambda M: np.abs(M).sum(axis=-1).max(axis=-1)  # noqa: E731 - ‖·‖∞ of a stack
+        eta = inf_norm(np.eye(L)[None] - W @ V) + 4 * L * eps * inf_norm(W) * inf_norm(V)
+        Vn = inf_norm(V) / (1.0 - eta)  # >= ‖W⁻¹‖∞ where eta < 1
+        WAV = W @ A @ V
+        rho_A = (inf_norm(WAV) + 4 * L * eps * inf_norm(W) * inf_norm(A) * inf_norm(V)) / (1.0 - eta)
+        w1 = np.abs(W[:, :, 0]).max(axis=1)
+        e0 = hist[:, ::-1] - r[:, None]  # the state: e(k−1), …, e(k−L)
+        z0 = np.abs(np.einsum("kij,kj->ki", W, e0)).max(axis=1)
+        R = 1.25 * Vn * z0 + tl
         Y = np.abs(r) + R
-        p = np.arange(deg + 1)
-        # T[:, i] = f^(i)(r) / i!, the Taylor coefficients of f at r
-        T = np.stack([np.sum(poly[:, i:] * np.array([float(_comb(q, i)) for q in range(i, deg + 1)])
-                             * r[:, None] ** (p[i:] - i), axis=1) for i in range(deg + 1)], axis=1)
-        eps = np.finfo(float).eps
-        dsize = np.sum(np.abs(poly[:, 1:]) * p[1:] * Y[:, None] ** (p[1:] - 1), axis=1)
-        rho = np.abs(T[:, 1]) + 8 * (deg + 1) * eps * dsize
-        for i in range(2, deg + 1):
-            rho = rho + i * np.abs(T[:, i]) * R ** (i - 1)
-        size = np.abs(fp[:, 0]) + sum(np.abs(fp[:, 1 + g]) * Y ** pw[g] for g in range(G))
-        delta = 4 * (deg + G + 2) * eps * size
+        S = np.zeros(K)
+        size = np.abs(fp[:, 0])  # Σ |terms| of a step within R of r, and at r
+        at_r = np.abs(fp[:, 0]) + np.abs(r)
+        F = fp[:, 0] - r
+        for g in range(G):
+            m = int(pw[g])
+            c = np.abs(fp[:, 1 + g])
+            size = size + c * Y ** m
+            at_r = at_r + c * np.abs(r) ** m
+            F = F + fp[:, 1 + g] * r ** m
+            if m >= 2:  # how far the partials of C_g y^m move within R of r (the linear ones do not)
+                S = S + c * m * ((Y ** (m - 1) - np.abs(r) ** (m - 1)) + 2 * m * eps * Y ** (m - 1))
+        n_ops = int(pw.sum()) + G + 2  # products and sums of one step: each rounds by at most eps/2 (γ_n bound × 2)
+        # c of the error recursion: F(r) as evaluated, its own rounding, and one step's rounding
+        c_bound = np.abs(F) + n_ops * eps * (at_r + size)
+        rho = rho_A + w1 * S * Vn
         gap = 1.0 - rho
-        F = fp[:, 0] + sum(fp[:, 1 + g] * r ** pw[g] for g in range(G)) - r
-        e_r = (np.abs(F) + 2 * delta) / gap
-        steps = np.ceil(np.log((d0 + e_r) / (tl / 2)) / -np.log1p(-gap)) + 2
-        ok = ((ncand > 0) & (d0 > tl) & (gap > 0) & (e_r <= tl / 8) & (delta / gap <= tl / 8) & (other > 2.5 * R)
-              & np.isfinite(steps) & np.isfinite(Y) & np.isfinite(size))
-    allowed = np.full(K, SETTLE_STEPS, dtype=np.int64)
-    longer = ok & (steps > SETTLE_STEPS)
-    if longer.any():  # the longer budget of a run the first pass leaves not settled (_settle_longer)
-        budget, _ = settle_budget(POLY, ip, fp[longer], cand[longer], ncand[longer], 1)
-        allowed[longer] = np.where(budget <= SETTLE_MAX_STEPS, budget, SETTLE_STEPS)
-    out = ok & (steps <= allowed)
-    return out, r
+        floor_y = Vn * w1 * c_bound / gap  # the error rounding and F(r) keep up
+        need = np.ceil(np.log(np.maximum(Vn * z0 / (tl / 2), 1.0)) / -np.log1p(-gap)) + 2 * L + 2
+        ref = np.maximum(np.abs(y0), np.where(valid, np.abs(cand), 0.0).max(axis=1))
+        ok = (fine & (ncand > 0) & (eta < 0.5) & (gap > 0) & (floor_y <= tl / 4) & (other > 2.5 * R)
+              & (Y < 1e6 * ref) & np.all(np.isfinite(e0), axis=1) & (need <= steps) & np.isfinite(size)
+              & np.isfinite(S))
+    r_out[ok] = r[ok]
+    return ok, r_out
 
 
-@lru_cache(maxsize=None)
-def _comb(n: int, k: int) -> int:
-    from math import comb
-
-    return comb(n, k)
+def _eigenbases(A: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Eigenvectors V of a stack of matrices A (K, n, n), their computed inverses W, and which rows have both
+    finite (a defective or singular basis is no basis: False there, its V and W the identity)."""
+    K, n, _ = A.shape
+    V = np.broadcast_to(np.eye(n, dtype=complex), (K, n, n)).copy()
+    fine = np.all(np.isfinite(A.reshape(K, -1)), axis=1)
+    if fine.any():
+        _, V[fine] = np.linalg.eig(A[fine])
+    W = np.broadcast_to(np.eye(n, dtype=complex), (K, n, n)).copy()
+    try:
+        W[fine] = np.linalg.inv(V[fine])
+    except np.linalg.LinAlgError:
+        for k in np.flatnonzero(fine):  # one by one: a singular basis refuses its own row, not the stack's
+            try:
+                W[k] = np.linalg.inv(V[k])
+            except np.linalg.LinAlgError:
+                fine[k] = False
+    ok = fine & np.all(np.isfinite(W.reshape(K, -1)), axis=1)
+    V[~ok] = np.eye(n)
+    W[~ok] = np.eye(n)
+    return V, W, ok
 
 
 #: No per-pair budgets, no earlier runs to go on from: the first pass of :func:`settle`.
