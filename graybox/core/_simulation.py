@@ -191,7 +191,9 @@ def simulate(
         the output, and the constant) and G(j) the steady gain of the linear output feedback at
         sample j's inputs (1 / (1 − c(j)), c(j) the sum of the coefficients of the single past
         outputs y(j−l), input-dependent terms θ y(j−l) u(j−i) included, where that lies in (0, 1),
-        else 1: the level a constant push holds a stable slow plant at), and the size at which the model's nonlinear
+        else 1: the level a constant push holds a stable slow plant at; and without input-dependent
+        feedback at least Π 1 / (1 − |p|) over the poles p of the stable linear feedback, the level
+        any push holds it within, a resonance driven at its frequency too), and the size at which the model's nonlinear
         output feedback matters (a limit cycle's scale), so it does not depend on the output's
         units, also for a run from rest (y0 = 0).
     input_names : tuple of str, optional

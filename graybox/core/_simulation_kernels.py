@@ -22,6 +22,8 @@ Nothing here validates input: callers in :mod:`graybox.core._simulation` do. The
 
 from __future__ import annotations
 
+import cmath
+import math
 from functools import lru_cache
 from typing import NamedTuple
 
@@ -31,7 +33,8 @@ import numpy as np
 from ._terms import Structure, require_inputs
 
 __all__ = ["Code", "encode", "simulate_one", "simulate_batch", "predict_ahead", "input_products", "record_inputs",
-           "kernel_inputs", "BOUND_FACTOR", "scaled_bound", "feedback_scale", "feedback_scales", "push_gain"]
+           "kernel_inputs", "BOUND_FACTOR", "scaled_bound", "feedback_scale", "feedback_scales", "push_gain",
+           "linear_margins"]
 
 
 class Code(NamedTuple):
@@ -247,8 +250,9 @@ def _input_parts(uptr, ulag, upow, usig, grp, theta, uflat, n, k0, mm, X, C, tmp
 
 #: The default divergence bound is this many times the run's own output scale: the largest of
 #: max|y0|, the model's feedback scale (:func:`feedback_scale`) and the level the inputs' direct push
-#: so far holds the output at, max_j≤k G(j) |X(j)| (X: the terms without y; G(j) the steady gain of the
-#: linear feedback at sample j's inputs, :func:`push_gain`), all in output units, so that it does not depend
+#: so far holds the output at, max_j≤k G(j) |X(j)| (X: the terms without y; G(j) the gain of the linear
+#: feedback at sample j's inputs, :func:`push_gain`, at least that of its constant part for any input,
+#: :func:`linear_margins`), all in output units, so that it does not depend
 #: on the output's units, also from rest.
 BOUND_FACTOR = 1e6
 _BIG = np.finfo(np.float64).max  # nothing drives the output yet: only an overflow counts
@@ -291,9 +295,9 @@ def feedback_scales(code: Code, thetas: np.ndarray, u: np.ndarray) -> np.ndarray
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def push_gain(feedback):  # pragma: no cover - compiled
-    """How far the linear output feedback at a sample amplifies a constant push: 1 / D with D = 1 − ``feedback``
-    where 0 < D < 1, else 1 (dimensionless).
+def push_gain(feedback, margin):  # pragma: no cover - compiled
+    """How far the linear output feedback at a sample amplifies the push: 1 / min(D, ``margin``) with D = 1 −
+    ``feedback`` where 0 < D < 1, else 1 (dimensionless); ``margin`` is :func:`linear_margins`' (1: none).
 
     ``feedback`` is the sum of the coefficients of the single past outputs y(k−l) at that sample, terms θ y(k−l)
     and input-dependent ones θ y(k−l) · (inputs) alike (C_g(k) of the monomials of output power 1), so the gain is
@@ -303,7 +307,55 @@ def push_gain(feedback):  # pragma: no cover - compiled
     unstable recursion's, so a diverging run is caught as early as before).
     """
     d = 1.0 - feedback
-    return 1.0 / d if 0.0 < d < 1.0 else 1.0
+    d = d if 0.0 < d < 1.0 else 1.0
+    return 1.0 / min(d, margin)
+
+
+def linear_margins(code: Code, thetas: np.ndarray) -> np.ndarray:
+    """1 / the gain of the constant linear output feedback for any input, per row of ``thetas`` (P, n_terms):
+    Π (1 − |p|) over the poles p of y(k) = Σ_l a_l y(k−l) (a_l the θ of the terms θ y(k−l)) where all lie inside
+    the unit circle, else 1. Shape (P,), in (0, 1].
+
+    A push X bounded by |X| <= x holds a stable linear recursion at |y| <= x Σ_j |h(j)| <= x Π 1 / (1 − |p|): for
+    real positive poles that is the steady gain 1 / D of :func:`push_gain`, but a lightly damped pair driven at its
+    frequency builds up to 1 / |A(e^{jω})|, up to 1 / (1 − |p|)² ≫ 1 / D (poles 0.9999999 e^{±0.5j}: 10¹⁴ against
+    4), which the bound must not call divergence. 1 (no floor) when a term y(k−l) · (inputs) feeds back too: the
+    constant terms are then no account of the feedback, which :func:`push_gain` reads at each sample.
+    """
+    th = np.atleast_2d(np.asarray(thetas, dtype=float))
+    out = np.ones(th.shape[0])
+    single = [t for t in range(th.shape[1]) if code.ny[t] == 1]
+    if not single or any(code.uptr[t] != code.uptr[t + 1] for t in single):
+        return out
+    lags = [int(code.ylag[t, 0]) for t in single]
+    L = max(lags)
+    if th.shape[0] == 1 and L <= 2:  # one run's (simulate, predict): the poles in floats, no array work
+        c = [0.0, 0.0]
+        for t, l in zip(single, lags):
+            c[l - 1] += float(th[0, t])
+        if not all(math.isfinite(v) for v in c):
+            return out
+        disc = cmath.sqrt(c[0] * c[0] + 4.0 * c[1])
+        r1, r2 = abs((c[0] + disc) / 2.0), abs((c[0] - disc) / 2.0)
+        out[0] = max((1.0 - r1) * (1.0 - r2), np.finfo(float).tiny) if r1 < 1.0 and r2 < 1.0 else 1.0
+        return out
+    a = np.zeros((th.shape[0], L))
+    for t, l in zip(single, lags):
+        a[:, l - 1] += th[:, t]
+    ok = np.all(np.isfinite(a), axis=1)
+    if ok.any():
+        with np.errstate(all="ignore"):
+            if L <= 2:  # the poles in closed form (a free run's common orders: no eigenvalue solver per call)
+                a1, a2 = a[ok, 0], (a[ok, 1] if L == 2 else np.zeros(int(ok.sum())))
+                disc = np.sqrt((a1 * a1 + 4.0 * a2).astype(complex))
+                rho = np.abs(np.stack([(a1 + disc) / 2.0, (a1 - disc) / 2.0], axis=1))
+            else:
+                C = np.zeros((int(ok.sum()), L, L))
+                C[:, 0, :] = a[ok]
+                C[:, np.arange(1, L), np.arange(L - 1)] = 1.0
+                rho = np.abs(np.linalg.eigvals(C))
+            out[ok] = np.where(np.all(rho < 1.0, axis=1), np.prod(1.0 - rho, axis=1), 1.0)
+    return np.clip(out, np.finfo(float).tiny, 1.0)
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -317,9 +369,10 @@ def _start_ref(y, start):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def _feedback_margins(C, gny, mm, D):  # pragma: no cover - compiled
+def _feedback_margins(C, gny, mm, D, margin):  # pragma: no cover - compiled
     # D[i] = 1 / push_gain at the samples i < mm: 1 − the sum of the coefficients C_g of the single past outputs
-    # (monomials of output power 1) where that lies in (0, 1), else 1; loops over the samples (vectorised)
+    # (monomials of output power 1) where that lies in (0, 1), else 1, and at most ``margin``; loops over the
+    # samples (vectorised)
     for i in range(mm):
         D[i] = 1.0
     for g in range(gny.shape[0]):
@@ -328,11 +381,12 @@ def _feedback_margins(C, gny, mm, D):  # pragma: no cover - compiled
                 D[i] -= C[g, i]
     for i in range(mm):
         d = D[i]
-        D[i] = d if 0.0 < d < 1.0 else 1.0
+        D[i] = min(d if 0.0 < d < 1.0 else 1.0, margin)
 
 
 @nb.njit(cache=True, nogil=True)
-def _one(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y0, start, bound, auto, scale):  # pragma: no cover - compiled
+def _one(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y0, start, bound, auto, scale,
+         margin):  # pragma: no cover - compiled
     # uflat: the (m, n) inputs flattened, input i at uflat[i*n:(i+1)*n]; 1-D slices of a 1-D
     # array keep the pass-1 loops as the single-input kernel had them (unit stride, vectorised)
     G = gny.shape[0]
@@ -351,7 +405,7 @@ def _one(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y0, start, bo
         # pass 1, off the recursion's critical path
         _input_parts(uptr, ulag, upow, usig, grp, theta, uflat, n, k0, mm, X, C, tmp)
         if auto:
-            _feedback_margins(C, gny, mm, tmp)
+            _feedback_margins(C, gny, mm, tmp, margin)
         # pass 2: the recursion over a few output monomials
         for i in range(mm):
             k = k0 + i
@@ -379,8 +433,9 @@ def simulate_one(code: Code, theta: np.ndarray, u: np.ndarray, y0: np.ndarray, s
     """
     uc = kernel_inputs(code, u)
     scale = feedback_scale(code, theta, u) if bound is None else 0.0
+    margin = float(linear_margins(code, theta)[0]) if bound is None else 1.0
     return _one(code.uptr, code.ulag, code.upow, code.usig, code.grp, code.gny, code.gylag, theta, uc.reshape(-1),
-                uc.shape[1], y0, start, 0.0 if bound is None else float(bound), bound is None, scale)
+                uc.shape[1], y0, start, 0.0 if bound is None else float(bound), bound is None, scale, margin)
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -399,7 +454,8 @@ def _monomials_step(X, C, gny, gylag, buf, i, j):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True)
-def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, horizon, bound, auto, scale):  # pragma: no cover - compiled
+def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, horizon, bound, auto, scale,
+           margin):  # pragma: no cover - compiled
     # The input-only parts X(k), C_g(k) once over the record; the samples before start + horizon - 1
     # by one free run from the record's start; every later sample t by a recursion of ``horizon``
     # steps from the measured outputs before t - horizon + 1: O(N min(horizon, N - horizon)) steps.
@@ -411,7 +467,7 @@ def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, h
     P = np.full(m, scale)
     ref = scale
     D = np.empty(m)
-    _feedback_margins(C, gny, m, D)
+    _feedback_margins(C, gny, m, D, margin)
     for i in range(m):
         lvl = abs(X[i]) / D[i]
         if lvl > ref:
@@ -467,10 +523,11 @@ def predict_ahead(code: Code, theta: np.ndarray, u: np.ndarray, y: np.ndarray, s
     """
     uc = kernel_inputs(code, u)
     scale = feedback_scale(code, theta, u) if bound is None else 0.0
+    margin = float(linear_margins(code, theta)[0]) if bound is None else 1.0
     return _ahead(code.uptr, code.ulag, code.upow, code.usig, code.grp, code.gny, code.gylag,
                   np.ascontiguousarray(theta, dtype=np.float64), uc.reshape(-1), uc.shape[1],
                   np.ascontiguousarray(y, dtype=np.float64), start, horizon,
-                  0.0 if bound is None else float(bound), bound is None, scale)
+                  0.0 if bound is None else float(bound), bound is None, scale, margin)
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -541,7 +598,7 @@ def _bound_start(ref):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def _bound_members(ref, bnd, xacc, cacc, acc):  # pragma: no cover - compiled
+def _bound_members(ref, bnd, xacc, cacc, acc, margin):  # pragma: no cover - compiled
     # The default bound of _one for every member p: its scale ref[p] grows with G_p(k) |X_p(k)| (xacc, the
     # sum of its terms without y; G_p(k) the push_gain of its linear feedback at sample k, cacc[p]), and a
     # sample beyond BOUND_FACTOR × that scale is NaN, and so is every later one, as _one stops there: a stopped
@@ -549,7 +606,7 @@ def _bound_members(ref, bnd, xacc, cacc, acc):  # pragma: no cover - compiled
     # other one).
     P = acc.shape[0]
     for p in range(P):
-        a = abs(xacc[p]) * push_gain(cacc[p])
+        a = abs(xacc[p]) * push_gain(cacc[p], margin[p])
         if a > ref[p]:
             ref[p] = a
             bnd[p] = scaled_bound(a)
@@ -560,8 +617,9 @@ def _bound_members(ref, bnd, xacc, cacc, acc):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True)
-def _batch_block(thT, U, ny, ylag, Y, start, ref):  # pragma: no cover - compiled
-    # ``ref`` (P,): each member's starting scale, for the default bound; empty: no bound
+def _batch_block(thT, U, ny, ylag, Y, start, ref, margin):  # pragma: no cover - compiled
+    # ``ref`` (P,): each member's starting scale, for the default bound; empty: no bound; ``margin`` (P,):
+    # linear_margins
     n, P = Y.shape
     mask = -1  # all ones: (k - lag) & mask == k - lag, the whole record is kept
     acc = np.empty(P)
@@ -571,18 +629,18 @@ def _batch_block(thT, U, ny, ylag, Y, start, ref):  # pragma: no cover - compile
     for k in range(start, n):
         _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, cacc, bounded)
         if bounded:
-            _bound_members(ref, bnd, xacc, cacc, acc)
+            _bound_members(ref, bnd, xacc, cacc, acc, margin)
         for p in range(P):
             Y[k, p] = acc[p]
 
 
 @nb.njit(cache=True, parallel=True)
-def _batch_block_parallel(blocks, U, ny, ylag, Y, start, refs):  # pragma: no cover - compiled
+def _batch_block_parallel(blocks, U, ny, ylag, Y, start, refs, margins):  # pragma: no cover - compiled
     # blocks: (n_blocks, T, step); Y: (n_blocks, N, step) with the initial rows filled; refs
     # (n_blocks, step) or (n_blocks, 0). An OpenMP team (see _batch_sse_parallel) rather than a
     # Python thread pool.
     for b in nb.prange(blocks.shape[0]):
-        _batch_block(blocks[b], U, ny, ylag, Y[b], start, refs[b])
+        _batch_block(blocks[b], U, ny, ylag, Y[b], start, refs[b], margins[b])
 
 
 def _blocks(thT: np.ndarray, threads: int) -> np.ndarray:
@@ -637,17 +695,19 @@ def simulate_batch(
     thT = np.ascontiguousarray(thetas.T, dtype=np.float64)
     U = _input_products(code.fptr, code.fsig, code.flag, code.fpow, kernel_inputs(code, u), start)
     ref = _member_scales(code, thetas, u, y0, start, bounded)
+    margin = linear_margins(code, thetas) if bounded else np.zeros(0)
     with np.errstate(all="ignore"):
         if threads <= 1 or P < 2 * threads:
             Y = np.empty((n, P))
             Y[:start, :] = y0[:start, None]
-            _batch_block(thT, U, code.ny, code.ylag, Y, start, ref)
+            _batch_block(thT, U, code.ny, code.ylag, Y, start, ref, margin)
             # a transposed view, not a copy: copying 5 MB cost more than the whole batch run
             return Y.T
         blocks = _blocks(thT, int(threads))
         Y = np.empty((blocks.shape[0], n, blocks.shape[2]))
         Y[:, :start, :] = y0[None, :start, None]
-        _batch_block_parallel(blocks, U, code.ny, code.ylag, Y, start, _ref_blocks(ref, blocks))
+        _batch_block_parallel(blocks, U, code.ny, code.ylag, Y, start, _ref_blocks(ref, blocks),
+                              _ref_blocks(margin - 1.0, blocks) + 1.0)  # padding members: margin 1
         return np.concatenate([Yb.T for Yb in Y])[:P]
 
 
@@ -670,7 +730,7 @@ def _ref_blocks(ref: np.ndarray, blocks: np.ndarray) -> np.ndarray:
 
 
 @nb.njit(cache=True, nogil=True)
-def _batch_sse(thT, U, ny, ylag, y, start, ring, ref):  # pragma: no cover - compiled
+def _batch_sse(thT, U, ny, ylag, y, start, ring, ref, margin):  # pragma: no cover - compiled
     # Same update as _batch_block, but the outputs live in a ring buffer of `ring` rows (a
     # power of two > max lag) and only the squared free-run error is kept: the population's
     # working set stays in L1 whatever N is. ``ref`` as for _batch_block.
@@ -689,7 +749,7 @@ def _batch_sse(thT, U, ny, ylag, y, start, ring, ref):  # pragma: no cover - com
     for k in range(start, n):
         _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, cacc, bounded)
         if bounded:
-            _bound_members(ref, bnd, xacc, cacc, acc)
+            _bound_members(ref, bnd, xacc, cacc, acc, margin)
         kk = k & mask
         yk = y[k]
         for p in range(P):
@@ -700,14 +760,14 @@ def _batch_sse(thT, U, ny, ylag, y, start, ring, ref):  # pragma: no cover - com
 
 
 @nb.njit(cache=True, parallel=True)
-def _batch_sse_parallel(blocks, U, ny, ylag, y, start, ring, refs):  # pragma: no cover - compiled
+def _batch_sse_parallel(blocks, U, ny, ylag, y, start, ring, refs, margins):  # pragma: no cover - compiled
     # blocks: (n_blocks, T, step) contiguous population blocks. An OpenMP team keeps its workers
     # spinning for a moment between calls, so a GA's millisecond calls do not pay for waking an
     # idle core each time (a Python thread pool did not beat one thread for them: BENCHMARKS.md).
     nb_ = blocks.shape[0]
     out = np.empty((nb_, blocks.shape[2]))
     for b in nb.prange(nb_):
-        out[b] = _batch_sse(blocks[b], U, ny, ylag, y, start, ring, refs[b])
+        out[b] = _batch_sse(blocks[b], U, ny, ylag, y, start, ring, refs[b], margins[b])
     return out
 
 
@@ -753,14 +813,15 @@ def batch_sse(
     if U is None:
         U = _input_products(code.fptr, code.fsig, code.flag, code.fpow, kernel_inputs(code, u), start)
     ref = _member_scales(code, np.atleast_2d(np.asarray(thetas, dtype=np.float64)), u, y, start, bounded)
+    margin = linear_margins(code, thetas) if bounded else np.zeros(0)
     ring = 1 << int(np.ceil(np.log2(start + 1)))
     with np.errstate(all="ignore"):
         P = thT.shape[1]
         if threads <= 1 or P < 2 * threads:
-            return _batch_sse(thT, U, code.ny, code.ylag, y, start, ring, ref)
+            return _batch_sse(thT, U, code.ny, code.ylag, y, start, ring, ref, margin)
         blocks = _blocks(thT, int(threads))
-        return _batch_sse_parallel(blocks, U, code.ny, code.ylag, y, start, ring,
-                                   _ref_blocks(ref, blocks)).ravel()[:P]
+        return _batch_sse_parallel(blocks, U, code.ny, code.ylag, y, start, ring, _ref_blocks(ref, blocks),
+                                   _ref_blocks(margin - 1.0, blocks) + 1.0).ravel()[:P]  # padding: margin 1
 
 
 @nb.njit(cache=True, nogil=True)
