@@ -222,3 +222,17 @@ def test_a_stable_resonance_driven_at_its_frequency_is_not_divergence():
     # the same resonator a hair unstable (poles 1 + 1e-4) is still caught, within its first 2e5 samples
     with pytest.raises(gb.DivergenceError):
         gb.Model(m.structure, [2 * 1.0001 * np.cos(w), -1.0001 ** 2, 1.0]).simulate(u[:200_000], [0.0, 0.0])
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_a_growing_pair_whose_steady_gain_looks_large_is_still_caught(threads):
+    """Poles 1.001 e^{±0.01j} (unstable) give D = 1 − Σa ≈ 1e-4 in (0, 1): the bound took 1/D = 1e4 as the gain and
+    let the run grow to 1.5e9 uncaught (review55a), where it stopped at sample 4668 before 1b0c1fe; a recursion with
+    a pole outside the unit circle has no steady level, so the push's own scale holds again."""
+    m = gb.Model(["y(k-1)", "y(k-2)", "u(k-1)"], [2 * 1.001 * np.cos(0.01), -1.001**2, 1.0])
+    assert 0 < 1 - m.theta[0] - m.theta[1] < 1e-3  # the case: D in (0, 1), small
+    u = np.ones(12_000)
+    with pytest.raises(gb.DivergenceError, match=r"at sample 4668 "):
+        m.simulate(u, [0.0, 0.0])
+    runs = gb.simulate_many(m, np.vstack([m.theta] * 3), gb.Record(u, np.zeros(u.size)), threads=threads)
+    assert np.isnan(runs[:, 4668:]).all() and np.isfinite(runs[:, :4668]).all()

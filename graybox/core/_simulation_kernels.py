@@ -304,8 +304,12 @@ def push_gain(feedback, margin):  # pragma: no cover - compiled
     the one the inputs the run sees give it. A stable linear recursion held by a constant push X settles at X / D:
     a slow plant sampled fast (two time constants of 1000 samples: D = 1e-6) rests at 10⁶ times its push, which the
     bound must not call divergence. D <= 0 is a root at z >= 1 (no steady level: the push's own scale is kept, as an
-    unstable recursion's, so a diverging run is caught as early as before).
+    unstable recursion's, so a diverging run is caught as early as before), and so is a ``margin`` above 1, a
+    recursion whose constant feedback has a pole on or outside the unit circle though 0 < D < 1 (a growing pair
+    1.001 e^{±0.01j}: D = 1e-4, and the gain 1e4 let it run to 1.5e9 uncaught).
     """
+    if margin > 1.0:  # the constant feedback has a pole on or outside the unit circle: no steady level
+        return 1.0
     d = 1.0 - feedback
     d = d if 0.0 < d < 1.0 else 1.0
     return 1.0 / min(d, margin)
@@ -314,7 +318,8 @@ def push_gain(feedback, margin):  # pragma: no cover - compiled
 def linear_margins(code: Code, thetas: np.ndarray) -> np.ndarray:
     """1 / the gain of the constant linear output feedback for any input, per row of ``thetas`` (P, n_terms):
     Π (1 − |p|) over the poles p of y(k) = Σ_l a_l y(k−l) (a_l the θ of the terms θ y(k−l)) where all lie inside
-    the unit circle, else 1. Shape (P,), in (0, 1].
+    the unit circle, 2 where one does not (no steady level, whatever D: :func:`push_gain` then keeps the push's own
+    scale), 1 where a term y(k−l) · (inputs) feeds back too or θ is not finite. Shape (P,), in (0, 2].
 
     A push X bounded by |X| <= x holds a stable linear recursion at |y| <= x Σ_j |h(j)| <= x Π 1 / (1 − |p|): for
     real positive poles that is the steady gain 1 / D of :func:`push_gain`, but a lightly damped pair driven at its
@@ -337,7 +342,7 @@ def linear_margins(code: Code, thetas: np.ndarray) -> np.ndarray:
             return out
         disc = cmath.sqrt(c[0] * c[0] + 4.0 * c[1])
         r1, r2 = abs((c[0] + disc) / 2.0), abs((c[0] - disc) / 2.0)
-        out[0] = max((1.0 - r1) * (1.0 - r2), np.finfo(float).tiny) if r1 < 1.0 and r2 < 1.0 else 1.0
+        out[0] = max((1.0 - r1) * (1.0 - r2), np.finfo(float).tiny) if r1 < 1.0 and r2 < 1.0 else 2.0
         return out
     a = np.zeros((th.shape[0], L))
     for t, l in zip(single, lags):
@@ -354,8 +359,8 @@ def linear_margins(code: Code, thetas: np.ndarray) -> np.ndarray:
                 C[:, 0, :] = a[ok]
                 C[:, np.arange(1, L), np.arange(L - 1)] = 1.0
                 rho = np.abs(np.linalg.eigvals(C))
-            out[ok] = np.where(np.all(rho < 1.0, axis=1), np.prod(1.0 - rho, axis=1), 1.0)
-    return np.clip(out, np.finfo(float).tiny, 1.0)
+            out[ok] = np.where(np.all(rho < 1.0, axis=1), np.prod(1.0 - rho, axis=1), 2.0)
+    return np.clip(out, np.finfo(float).tiny, 2.0)
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -381,7 +386,7 @@ def _feedback_margins(C, gny, mm, D, margin):  # pragma: no cover - compiled
                 D[i] -= C[g, i]
     for i in range(mm):
         d = D[i]
-        D[i] = min(d if 0.0 < d < 1.0 else 1.0, margin)
+        D[i] = 1.0 if margin > 1.0 else min(d if 0.0 < d < 1.0 else 1.0, margin)
 
 
 @nb.njit(cache=True, nogil=True)
