@@ -7,7 +7,12 @@ rows). The readers must give the same floats in every dialect (checked here too)
 file with a row of units under the header (``units_row=True``) against the same file without it:
 10⁵ rows (``--units-rows``) of time, rpm near 3000 and Pa near 2e5, ``;`` with ``.`` and with ``,``.
 
-    python benchmarks/bench_csv.py [--rows 1000000] [--units-rows 100000]
+Then (``--loggers N``, alone with ``--only-loggers``) a logger's files of N rows: a Campbell Scientific TOA5 file
+(every text field quoted) read with ``Ts=`` and with ``time="TIMESTAMP"``, and a plain CSV whose time column holds
+ISO 8601 stamps; run it with ``PYTHONPATH`` at an older checkout to compare (a time column of dates was refused
+there).
+
+    python benchmarks/bench_csv.py [--rows 1000000] [--units-rows 100000] [--loggers 200000] [--only-loggers]
 """
 
 from __future__ import annotations
@@ -31,8 +36,13 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--rows", type=int, default=1_000_000)
     ap.add_argument("--units-rows", type=int, default=100_000)
+    ap.add_argument("--loggers", type=int, default=200_000)
+    ap.add_argument("--only-loggers", action="store_true")
     args = ap.parse_args()
     print(f"# {datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M} UTC, {machine()}, git {git_rev()}")
+    if args.only_loggers:
+        loggers(args.loggers)
+        return
     rng = np.random.default_rng(0)
     table = np.column_stack([np.arange(args.rows) * 0.001, rng.standard_normal((args.rows, 2))])
     got = {}
@@ -52,6 +62,30 @@ def main() -> None:
     t = timeit(gb.load_pumping, repeat=20)
     print(f"load_pumping (bundled, 2 files): {t * 1e3:.1f} ms")
     units_row(args.units_rows)
+    loggers(args.loggers)
+
+
+def loggers(n: int) -> None:
+    """A TOA5 file and a CSV of ISO stamps, n rows at 1 s (median of 3 reads); a refusal said as such."""
+    t0 = datetime.datetime(2026, 1, 1)
+    stamps = [f"{t0 + datetime.timedelta(seconds=k):%Y-%m-%d %H:%M:%S}" for k in range(n)]
+    with tempfile.TemporaryDirectory() as d:
+        toa5, iso = Path(d) / "CR1000_Table1.dat", Path(d) / "iso.csv"
+        toa5.write_bytes(('"TOA5","CR1000","CR1000","1234","CR1000.Std.32","CPU:x.CR1","1","Table1"\r\n'
+                          '"TIMESTAMP","RECORD","Power","Temp"\r\n"TS","RN","W","degC"\r\n"","","Smp","Avg"\r\n'
+                          + "".join(f'"{s}",{k},{k % 7}.5,{0.25 * k}\r\n' for k, s in enumerate(stamps))).encode())
+        iso.write_text("t,u,y\n" + "".join(f"{s},{k % 7}.5,{0.25 * k}\n" for k, s in enumerate(stamps)))
+        for what, read in ((f"TOA5, Ts=1.0", lambda: load_record_csv(toa5, u="Power", y="Temp", Ts=1.0)),
+                           ("TOA5, time='TIMESTAMP'", lambda: load_record_csv(toa5, u="Power", y="Temp",
+                                                                             time="TIMESTAMP")),
+                           ("CSV, ISO 8601 time column", lambda: load_record_csv(iso, u="u", y="y", time="t"))):
+            try:
+                t = timeit(read, repeat=3)
+            except ValueError as exc:
+                print(f"{what:26s} {n} rows: refused ({str(exc)[:60]}…)")
+                continue
+            assert read().Ts == 1.0 and read().y.size == n
+            print(f"{what:26s} {n} rows: {t:.3f} s")
 
 
 def units_row(n: int) -> None:
