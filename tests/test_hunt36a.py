@@ -399,6 +399,8 @@ def test_narx_iosystem_takes_the_model_s_own_period_as_local_model_does():
     pytest.importorskip("control")
     m = gb.Model(gb.Structure(["y(k-1)", "u(k-1)", "1"]), [0.5, 0.2, 1.0], Ts=0.1)
     assert gb.narx_iosystem(m).dt == 0.1 == gb.local_model(m, 1.0).Ts
-    assert gb.narx_iosystem(m, Ts=0.2).dt == 0.2  # given: the user's word, as for local_model
+    with pytest.raises(ValueError, match=r"Ts = 0.2 s, but model .* was identified at Ts = 0.1 s"):
+        gb.narx_iosystem(m, Ts=0.2)  # its coefficients hold per step of 0.1 s, as for local_model
+    assert gb.narx_iosystem(gb.Model(m.structure, m.theta, Ts=1.0), Ts=0.2).dt == 0.2  # a record's default 1 s
     with pytest.raises(ValueError, match="Ts .*is needed"):
         gb.narx_iosystem(gb.Model(m.structure, m.theta))

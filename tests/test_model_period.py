@@ -3,6 +3,7 @@ a discrete-time model holds at one period (graybox.Model.Ts, NeuralModel.Ts)."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import warnings
 
@@ -82,7 +83,12 @@ def test_a_local_model_takes_the_period_the_model_was_identified_at():
     m = gb.els(ST, gb.Dataset(_records(0.1), _records(0.1, seed=1), None)).model
     lm = gb.local_model(m, 0.5)
     assert lm.Ts == 0.1 and lm.to_statespace().dt == 0.1
-    assert gb.local_model(m, 0.5, Ts=0.2).Ts == 0.2  # given: it is the user's
+    # given at another period: refused (Ts=100 meant as ms beside a 0.1 s model gave τ 1000 times too long), but
+    # over a model's 1 s, the period of records made without Ts=, it is the user's word
+    with pytest.raises(ValueError, match=r"Ts = 100 s, but model .* identified at Ts = 0.1 s.*dataclasses.replace"):
+        gb.local_model(m, 0.5, Ts=100)
+    assert gb.local_model(m, 0.5, Ts=0.1).Ts == 0.1
+    assert gb.local_model(dataclasses.replace(m, Ts=1.0), 0.5, Ts=0.2).Ts == 0.2
     with pytest.raises(ValueError, match="Ts .*is needed"):
         gb.local_model(gb.Model(m.structure, m.theta), 0.5)  # a hand-made model: no period known
 

@@ -670,9 +670,15 @@ def check_Ts(Ts: float | None, data: object, model: Model, takes_data: bool = Tr
             return float(recs[0].Ts)
         raise ValueError("Ts (the sampling period, s) is needed: pass Ts=" + (" or data= (records)" if takes_data else "")
                          + ", or use a model an estimator made (it knows the period it was identified at)")
-    # given, it is the user's word: a record made without Ts= has the default period 1 s, and its
-    # model's local models are then asked for at the real one
-    return check_real(Ts, "Ts", low=0, low_open=True)
+    # given, it is the user's word over a model's 1 s, the period of a record made without Ts= (its model's local
+    # models are then asked for at the real one); a model identified at another period is refused: its coefficients
+    # hold per step of that period (Ts=50 meant as 50 ms beside a 0.05 s model gave τ 1000 times too long)
+    Ts = check_real(Ts, "Ts", low=0, low_open=True)
+    if model.Ts is not None and model.Ts != 1.0 and abs(Ts - model.Ts) > 1e-9 * model.Ts:
+        raise ValueError(f"Ts = {Ts:g} s, but model {model.name!r} was identified at Ts = {model.Ts:g} s, the period its "
+                         "coefficients hold per step of: leave Ts= out (seconds, the model's own is taken), or, if the "
+                         "model's period is wrong, give the model its own: dataclasses.replace(model, Ts=...)")
+    return Ts
 
 
 def _y0s(y0: object, M: int) -> list[float | None]:
@@ -731,7 +737,8 @@ def local_model(model: Model, ubar: float | Sequence[float] | np.ndarray, *, Ts:
         (transient inputs left out are 0, their level at every steady state).
     Ts : float, optional
         Sampling period (s); default the model's own (``model.Ts``, the period it was identified at;
-        ``data`` at another period is refused), else ``data``'s.
+        ``data`` at another period is refused, and so is a ``Ts`` other than a model's own but for its 1 s, the
+        period of records made without ``Ts=``), else ``data``'s.
     y0 : float, optional
         Initial output of the settling run that picks the equilibrium (output units), e.g. the
         measured ȳ; needed when several equilibria are stable, and where every ȳ is an equilibrium
@@ -956,7 +963,8 @@ def operating_curve(model: Model, ubar: Sequence[float] | np.ndarray, *, Ts: flo
         them: m values could be one point as well, and are refused).
     Ts : float, optional
         Sampling period (s); default the model's own (``model.Ts``, the period it was identified at;
-        ``data`` at another period is refused), else ``data``'s.
+        ``data`` at another period is refused, and so is a ``Ts`` other than a model's own but for its 1 s, the
+        period of records made without ``Ts=``), else ``data``'s.
     y0 : float or array_like of shape (M,), optional
         Initial output of each point's settling run (see :func:`local_model`). Without it a point
         where the model has several stable equilibria gets the status ``"several stable equilibria"``

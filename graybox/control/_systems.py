@@ -251,7 +251,8 @@ def narx_iosystem(model: Model, *, Ts: float | None = None, noise: bool = False,
         A polynomial NARX model.
     Ts : float, optional
         Sampling period (s); default the model's own (``model.Ts``, the period it was identified at), as
-        for :func:`local_model`. Needed for a model that does not know its period.
+        for :func:`local_model` (another than the model's own refused but over its 1 s). Needed for a model that does
+        not know its period.
     noise : bool
         Add the noise e(k) as a last system input ``"noise"`` (output units; not ``"e"``, the name a loop's
         error signal usually has, which ``control.interconnect`` would join to it by name) and the model's linear MA
