@@ -503,3 +503,12 @@ def test_columns_shorter_than_the_file_end_where_their_cells_do(tmp_path):
         load_record_csv(f, u="u", y="y", time="t")
     with pytest.raises(ValueError, match=r"line 3, column 'y': empty cell"):  # one column of several empty
         load_record_csv(f, u="v", y="y", Ts=0.5)
+
+
+def test_a_short_line_whose_quote_took_in_its_fields_says_so(tmp_path):
+    """A line starting with a quote no quote closes read as one field: 'line 4 has 1 field(s)', no word of the quote
+    (review55a)."""
+    f = tmp_path / "q.csv"
+    f.write_text('t,u,y,note\n0,1,2,ok\n1,2,3,ok\n"2,3,4,x\n', encoding="utf-8")
+    with pytest.raises(ValueError, match=r"line 4 has 1 field\(s\).*one field, '2,3,4,x', is quoted and holds ','"):
+        load_record_csv(f, u="u", y="y", time="t")

@@ -813,6 +813,10 @@ def _number(p: Path, line: int, col: str, cell: str, decimal: str, *, time: bool
 
 
 def _other_delimiter_hint(row: Sequence[str], delimiter: str) -> str:
+    quoted = next((c for c in row if delimiter in c or "\n" in c), None)
+    if quoted is not None:  # the csv reader took delimiters into one field: quoted (a quote left open, often)
+        return (f" (one field, {quoted.strip()[:40]!r}, is quoted and holds {_name(delimiter)}: if a quote (\") "
+                "opens it that no quote closes, close the quote or delete it)")
     joined = delimiter.join(row)
     other = [d for d in _DELIMITERS if d != delimiter and d in joined]
     return f" (it holds {_name(other[0])}: mixed delimiters? pass delimiter= to choose)" if other else ""
