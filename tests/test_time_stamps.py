@@ -151,3 +151,20 @@ def test_a_quoted_file_reads_as_the_same_file_unquoted(tmp_path):
     quoted.write_text('"t","n","u","y"\n' + "\n".join(rows).replace('"2.5"', '2"5') + "\n", encoding="utf-8")
     with pytest.raises(ValueError, match=r"column 'u'"):  # a quote inside a number is no quoting: never dropped
         gb.load_record_csv(quoted, u="u", y="y", time="t")
+
+
+def test_a_toa5_file_thinned_to_every_kth_record_reads_and_its_gaps_are_still_named(tmp_path):
+    """RECORD stepping by 2 throughout (every second sample kept) was refused as records missing at its first line."""
+    f = tmp_path / "thin.dat"
+
+    def write(records):
+        f.write_text(TOA5_HEAD + "".join(f'"2026-01-01 00:00:{2 * k:02d}",{r},1.0,2.{k}\n'
+                                         for k, r in enumerate(records)), encoding="utf-8")
+        return f
+
+    assert gb.load_record_csv(write([10, 12, 14, 16, 18]), u="Power", y="Temp", time="TIMESTAMP").Ts == 2.0
+    with pytest.raises(ValueError, match=r"jumps from 14 \(line 7\) to 18 \(line 8\): 3 record\(s\) missing from the "
+                                         r"file \(it holds one record in 2: 1 of those\)"):
+        gb.load_record_csv(write([10, 12, 14, 18, 20]), u="Power", y="Temp", Ts=2.0)
+    with pytest.raises(ValueError, match=r"jumps from 11 \(line 6\) to 13 \(line 7\): 1 record\(s\) missing"):
+        gb.load_record_csv(write([10, 11, 13, 14, 15]), u="Power", y="Temp", Ts=1.0)

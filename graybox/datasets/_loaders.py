@@ -1385,9 +1385,16 @@ def _check_record_numbers(p: Path, rec: np.ndarray, lines: np.ndarray) -> None:
     """A ``ValueError`` when a TOA5 file's ``RECORD`` numbers do not step by one from sample to sample: records
     missing from the file (overwritten in the logger's memory before they were collected, lines deleted) or repeated
     in it (a collection appended twice, the table reset), so the lines either side are no one record at one sampling
-    period. (A pause of the logger does not show here: its record numbers run on, and only TIMESTAMP jumps.)"""
+    period. (A pause of the logger does not show here: its record numbers run on, and only TIMESTAMP jumps.) A file
+    thinned to every k-th sample (CardConvert's or a script's decimation) steps by k throughout: its usual (median)
+    step, a whole number held by most lines, is the step expected (it was refused as records missing at its first
+    line)."""
     step = np.diff(rec)
-    bad = np.flatnonzero(step != 1)
+    usual = float(np.median(step)) if step.size else 1.0
+    # taken where it is the step of most lines, two at least (one step, 7 to 2345686, is no thinning: a gap)
+    held = int(np.count_nonzero(step == usual))
+    usual = usual if usual >= 1 and usual.is_integer() and held >= max(2, step.size / 2) else 1.0
+    bad = np.flatnonzero(step != usual)
     if not bad.size:
         return
     i = int(bad[0])
@@ -1399,9 +1406,11 @@ def _check_record_numbers(p: Path, rec: np.ndarray, lines: np.ndarray) -> None:
 
     where = f"from {text(a)} (line {lines[i]}) to {text(b)} (line {lines[i + 1]})"
     if b > a:
+        thinned = "" if usual == 1 else (f" (it holds one record in {usual:.0f}: {text((b - a) / usual - 1)} of "
+                                         "those)")
         raise ValueError(f"{p}: column 'RECORD', the TOA5 file's record numbers, jumps {where}: {text(b - a - 1)} "
-                         "record(s) missing from the file (overwritten in the logger's memory before they were "
-                         "collected, or lines deleted), so the samples either side are no "
+                         f"record(s) missing from the file{thinned} (overwritten in the logger's memory before they "
+                         "were collected, or lines deleted), so the samples either side are no "
                          "one record at one sampling period; cut the file into two records at the gap (several "
                          "records of one plant go to the estimators as a list)")
     raise ValueError(f"{p}: column 'RECORD', the TOA5 file's record numbers, goes back {where}: samples held twice "
