@@ -261,9 +261,17 @@ def test_a_new_band_reruns_only_the_cells_that_read_it(tmp_path):
         row = table.loc["PE D_SF"]
         np.testing.assert_allclose(row["theta"], choice.model.theta, rtol=1e-8)
         assert row["lambda1"] == choice.lambda1 and bool(row["in_band"]) == bool(choice.in_band)
-    every = gb.load_results(store, spec="all")  # each cell once, with the band of the first spec holding it
-    assert sorted(every["band"]) == [bands[0]] * len(variants) + [bands[1]]
-    assert every.loc[every["band"] == bands[1], "variant"].tolist() == ["PE D_SF"]
+    # each cell once; a cell that reads no band with the largest band of the specs holding it (it was the first
+    # spec's: read with spec="all", PE D_SF's cell under 1e-3 ranked first while PE min JSF, the same Pareto set,
+    # and LS, the model PE D_SF ranked, had 'no model has J_SF ≤ B = 1e-05')
+    every = gb.load_results(store, spec="all")
+    assert sorted(every["band"]) == [bands[0]] + [bands[1]] * len(variants)
+    assert every.loc[every["band"] == bands[0], "variant"].tolist() == ["PE D_SF"]
+    # the store's cells ranked together as the spec holding every one of them (spec 2, the larger band) ranks them
+    both, last = gx.leaderboard(every), gx.leaderboard(gb.load_results(store, spec=2))
+    assert both["rank"].notna().all()
+    np.testing.assert_array_equal(both["JS_valid"], last.loc[both.index, "JS_valid"])
+    assert (both["band"] == bands[1]).all()
     # the points' δ a band constraint takes is still in its key: other δ, a new cell (the band alone did not say it)
     other = gb.Dataset(data.ident, data.valid, gb.StaticPoints(data.static.ubar, data.static.ybar, input_names=("n",),
                                                                uncertainty=0.02))

@@ -961,21 +961,28 @@ def read_store(path: str | os.PathLike, spec: str | int = "latest") -> tuple[dic
 def _spec_bands(spec: Mapping[str, Any]) -> dict[str, float | None]:
     """Each data set's band in a stored spec, by name. A cell whose variant reads no band is keyed without it
     (:func:`graybox.experiments._spec.reads_band`) and kept once for every band: its row shows the band of the
-    spec it is read with, not the one of the spec that ran it."""
+    spec it is read with, not the one of the spec that ran it (read with every spec, the largest of theirs:
+    :func:`_all_rows`)."""
     data = json.loads(spec["spec"]).get("data", [])
     return {d["name"]: d.get("band") for d in data if isinstance(d, Mapping) and "name" in d}
 
 
 def _all_rows(conn: sqlite3.Connection, cols: str, bands: Mapping[int, Mapping[str, float | None]]
               ) -> list[dict[str, Any]]:
-    """Every cell once, named by the first spec that holds it (and with its band, :func:`_spec_bands`); names with
-    two meanings told apart."""
-    entries = conn.execute("SELECT spec, position, key, structure, variant, structure_hash, variant_hash "
+    """Every cell once, named by the first spec that holds it; names with two meanings told apart. Its band is the
+    largest its specs give its data set (:func:`_spec_bands`): a cell that reads no band is one result under each
+    of them, and a variant that reads it has a cell under each, whose members the leaderboard judges each by its
+    own; judged by the first spec's band alone, the same Pareto set or model qualified in the one variant and not
+    in the other."""
+    entries = conn.execute("SELECT spec, position, key, data, structure, variant, structure_hash, variant_hash "
                            "FROM spec_cells ORDER BY spec, position").fetchall()
     first: dict[str, tuple] = {}
+    held: dict[str, list[float | None]] = {}  # key -> the band of each spec holding it that names its data set
     meanings: dict[tuple[str, str], dict[str, int]] = {}  # (kind, name) -> content hash -> first spec
-    for spec, pos, key, s, v, sh, vh in entries:
+    for spec, pos, key, d, s, v, sh, vh in entries:
         first.setdefault(key, (spec, pos, s, v, sh, vh))
+        if d in bands.get(spec, {}):
+            held.setdefault(key, []).append(bands[spec][d])
         meanings.setdefault(("structure", s), {}).setdefault(sh, spec)
         meanings.setdefault(("variant", v), {}).setdefault(vh, spec)
 
@@ -990,7 +997,8 @@ def _all_rows(conn: sqlite3.Connection, cols: str, bands: Mapping[int, Mapping[s
         if f is not None:
             spec, pos, s, v, sh, vh = f
             row.update(structure=label("structure", s, sh), variant=label("variant", v, vh))
-            row["band"] = bands.get(spec, {}).get(row["data"], row["band"])
+            given = [b for b in held.get(row["key"], ()) if b is not None]
+            row["band"] = max(given) if given else None if row["key"] in held else row["band"]
             row["_order"] = (spec, pos)
         else:  # not reachable through the API: every cell is registered before it runs
             row["_order"] = (10**9, row["cell_index"])
@@ -1099,7 +1107,8 @@ def load_results(path: str | os.PathLike, *, spec: str | int = "latest") -> pd.D
         the chosen model's ``terms`` (tuple of str), ``theta`` (ndarray, engineering units; None
         for neural models), ``n_params`` (N_p: the structure's number of terms once it is made, whatever
         the cell's status; a network's parameters once it is fitted), ``lambda1``, ``rule`` and ``in_band`` of the
-        decision, ``band`` (the data set's J_SF band); the shared evaluator's figures on both
+        decision, ``band`` (the data set's J_SF band; with "all", the largest of the specs holding the cell: a cell
+        that reads no band is one result under each); the shared evaluator's figures on both
         records ``J1_ident``, ``JS_ident``, ``fit_ident``, ``J1_valid``, ``JS_valid``,
         ``fit_valid`` (MSE in output units², fit in %), ``JSF`` and ``static_miss`` (largest
         |ȳ_model(ū_i) − ȳ_i|, output units); ``members`` (Pareto sets: dict of arrays
