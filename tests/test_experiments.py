@@ -278,6 +278,10 @@ def test_rows_hold_the_shared_evaluators_figures(small_store, pumping):
     assert mem["JS_valid"][i] == pytest.approx(p.JS_valid, rel=1e-9)
     assert mem["fit_valid"][i] == pytest.approx(p.fit_valid, rel=1e-9)
     assert p.rule == "min J_SF"
+    # min J_SF (as min correlation) decides by no band: in_band unknown, as for least squares (it read True
+    # whatever the J_SF: a band of 1e-5 for the data set, its stored cell reused, read True beside J_SF 6.6e-4)
+    assert pd.isna(p.in_band)
+    assert gx.leaderboard(df, rule="chosen").loc[("pumping", "made", "PE"), "in_band"] is pd.NA
 
 
 def test_infeasible_diverged_and_failed_cells_are_rows(tmp_path):

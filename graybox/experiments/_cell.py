@@ -193,8 +193,9 @@ def _estimate(cell: Cell, st: gb.Structure, data: gb.Dataset):
     raise ValueError(f"unknown estimator {est!r}")  # pragma: no cover - the spec refuses it
 
 
-def _decide(cell: Cell, pareto: gb.ParetoSet, data: gb.Dataset) -> tuple[int, str, bool]:
-    """(member index, rule, in band) or ``InfeasibleError`` when D_SF finds no member in its band."""
+def _decide(cell: Cell, pareto: gb.ParetoSet, data: gb.Dataset) -> tuple[int, str, bool | None]:
+    """(member index, rule, in band: None for the rules that decide by no band) or ``InfeasibleError`` when D_SF
+    finds no member in its band."""
     d = cell.variant_spec["decision"]
     if d["rule"] == "dsf":
         # no member in the band and no fallback: InfeasibleError naming the smallest J_SF reached
@@ -202,8 +203,9 @@ def _decide(cell: Cell, pareto: gb.ParetoSet, data: gb.Dataset) -> tuple[int, st
         return dec.index, dec.rule, bool(dec.in_band)
     if d["rule"] == "min_correlation":
         dec = gb.decide_min_correlation(pareto, data.ident, output=d["output"])
-        return dec.index, dec.rule, True
-    return min_jsf_index(pareto), "min J_SF", True
+        return dec.index, dec.rule, None
+    # no band read (the cell is keyed without it): whether its member lies in the data set's band is not decided here
+    return min_jsf_index(pareto), "min J_SF", None
 
 
 def _members(pareto: gb.ParetoSet, data: gb.Dataset) -> dict[str, Any]:
@@ -287,7 +289,8 @@ def run_cell(cell: Cell, data: gb.Dataset, *, threads: int = 1) -> dict[str, Any
                 row["members"] = _members(pareto, data)
                 i, rule, in_band = _decide(cell, pareto, data)
                 model = pareto.member_model(i, name=f"{cell.variant} / {cell.structure}")
-                row.update(lambda1=float(pareto.lambdas[i]), rule=rule, in_band=int(in_band))
+                row.update(lambda1=float(pareto.lambdas[i]), rule=rule,
+                           in_band=None if in_band is None else int(in_band))
             row["n_params"] = int(model.n_params)
             if isinstance(model, gb.Model):
                 row["theta"] = model.theta.tolist()

@@ -1107,8 +1107,9 @@ def load_results(path: str | os.PathLike, *, spec: str | int = "latest") -> pd.D
         the chosen model's ``terms`` (tuple of str), ``theta`` (ndarray, engineering units; None
         for neural models), ``n_params`` (N_p: the structure's number of terms once it is made, whatever
         the cell's status; a network's parameters once it is fitted), ``lambda1``, ``rule`` and ``in_band`` of the
-        decision, ``band`` (the data set's J_SF band; with "all", the largest of the specs holding the cell: a cell
-        that reads no band is one result under each); the shared evaluator's figures on both
+        decision (``in_band`` missing where the rule reads no band: min J_SF, min correlation), ``band`` (the data
+        set's J_SF band; with "all", the largest of the specs holding the cell: a cell that reads no band is one
+        result under each); the shared evaluator's figures on both
         records ``J1_ident``, ``JS_ident``, ``fit_ident``, ``J1_valid``, ``JS_valid``,
         ``fit_valid`` (MSE in output units², fit in %), ``JSF`` and ``static_miss`` (largest
         |ȳ_model(ū_i) − ȳ_i|, output units); ``members`` (Pareto sets: dict of arrays
