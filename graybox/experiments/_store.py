@@ -970,19 +970,19 @@ def _spec_bands(spec: Mapping[str, Any]) -> dict[str, float | None]:
 def _all_rows(conn: sqlite3.Connection, cols: str, bands: Mapping[int, Mapping[str, float | None]]
               ) -> list[dict[str, Any]]:
     """Every cell once, named by the first spec that holds it; names with two meanings told apart. Its band is the
-    largest its specs give its data set (:func:`_spec_bands`): a cell that reads no band is one result under each
-    of them, and a variant that reads it has a cell under each, whose members the leaderboard judges each by its
-    own; judged by the first spec's band alone, the same Pareto set or model qualified in the one variant and not
-    in the other."""
+    largest the specs holding it give its data set under the name the row shows (:func:`_spec_bands`): a cell that
+    reads no band is one result under each of them, and a variant that reads it has a cell under each, whose members
+    the leaderboard judges each by its own; judged by the first spec's band alone, the same Pareto set or model
+    qualified in the one variant and not in the other."""
     entries = conn.execute("SELECT spec, position, key, data, structure, variant, structure_hash, variant_hash "
                            "FROM spec_cells ORDER BY spec, position").fetchall()
     first: dict[str, tuple] = {}
-    held: dict[str, list[float | None]] = {}  # key -> the band of each spec holding it that names its data set
+    held: dict[tuple[str, str], list[float | None]] = {}  # (key, data set name) -> each band a spec holding it gives
     meanings: dict[tuple[str, str], dict[str, int]] = {}  # (kind, name) -> content hash -> first spec
     for spec, pos, key, d, s, v, sh, vh in entries:
         first.setdefault(key, (spec, pos, s, v, sh, vh))
         if d in bands.get(spec, {}):
-            held.setdefault(key, []).append(bands[spec][d])
+            held.setdefault((key, d), []).append(bands[spec][d])
         meanings.setdefault(("structure", s), {}).setdefault(sh, spec)
         meanings.setdefault(("variant", v), {}).setdefault(vh, spec)
 
@@ -997,8 +997,11 @@ def _all_rows(conn: sqlite3.Connection, cols: str, bands: Mapping[int, Mapping[s
         if f is not None:
             spec, pos, s, v, sh, vh = f
             row.update(structure=label("structure", s, sh), variant=label("variant", v, vh))
-            given = [b for b in held.get(row["key"], ()) if b is not None]
-            row["band"] = max(given) if given else None if row["key"] in held else row["band"]
+            # the bands given to the data set by the name the row shows (a data set renamed in a later spec keeps its
+            # rows under the first name, ranked apart from the new name's)
+            at = (row["key"], row["data"])
+            given = [b for b in held.get(at, ()) if b is not None]
+            row["band"] = max(given) if given else None if at in held else row["band"]
             row["_order"] = (spec, pos)
         else:  # not reachable through the API: every cell is registered before it runs
             row["_order"] = (10**9, row["cell_index"])
