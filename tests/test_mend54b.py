@@ -191,3 +191,22 @@ def test_els_uncertainty_is_the_same_at_an_offset_of_y():
     np.testing.assert_allclose(b.std[_SAME], a.std[_SAME], rtol=1e-4, atol=0)
     np.testing.assert_allclose(b.noise_std, a.noise_std, rtol=1e-4, atol=0)
     assert b.sigma2 == pytest.approx(a.sigma2, rel=1e-4, abs=0)
+
+
+def test_pe_uncertainty_default_static_sigma_holds_the_misfit_near_a_fold_of_the_member():
+    # mend55b. At λ1 = 1e-3 the member bends its static curve to a fold at ū = -0.9 (∂s/∂ȳ = 0.001 there); the
+    # default σ_SF was Σ(s_i/g_i)² over a first-order ν of ȳ-distances, and both blew up with 1/g at that one
+    # point (ν = 466 for 7 points): σ_SF came from that point alone. The points here carry a known systematic
+    # error 0.05 sin(3ū) (rms 0.035) under noise of σ = 0.005, so an honest σ_SF (which counts the systematic
+    # misfit as noise, the safe side) is well above σ; it read as little as 1.3 σ. Now about 2.6 σ or more.
+    u, y, yb = _quadratic_plant()
+    rec = gb.Record(u, y)
+    rng = np.random.default_rng(0)
+    reported = []
+    for _ in range(16):
+        pts = gb.StaticPoints(_UB, yb + 0.005 * rng.standard_normal(_UB.size))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", gb.StaticRangeWarning)
+            th = gb.pe_thetas(_QUADRATIC, rec, pts, lambdas=[1e-3], solver="closed")[0]
+            reported.append(np.sqrt(gb.pe_uncertainty(gb.Model(_QUADRATIC, th), rec, pts, lambda1=1e-3).static_sigma2))
+    assert min(reported) > 2 * 0.005
