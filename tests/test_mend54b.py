@@ -210,3 +210,24 @@ def test_pe_uncertainty_default_static_sigma_holds_the_misfit_near_a_fold_of_the
             th = gb.pe_thetas(_QUADRATIC, rec, pts, lambdas=[1e-3], solver="closed")[0]
             reported.append(np.sqrt(gb.pe_uncertainty(gb.Model(_QUADRATIC, th), rec, pts, lambda1=1e-3).static_sigma2))
     assert min(reported) > 2 * 0.005
+
+
+def test_pe_pareto_reports_the_errors_of_its_own_coordinates_at_a_far_output_offset():
+    # mend55b. pe_pareto fits a closed structure on the centred signals, but the set's J_1, J_S, J_SF (and J_SF^QR)
+    # were computed from the raw θ on the raw signals, whose y(k-1)^2 carries the offset's powers: at y + 2^20 (the
+    # data the same to the last bit) J_1 came out 1.2e-4, J_S 7e-4 and J_SF^QR 2e-2 off relative from y + 0
+    u, y, yb = _quadratic_plant()
+    lams = [1e-3, 0.1, 1.0]
+    sets = []
+    for oy in (0.0, 2.0 ** 20):
+        assert np.array_equal((y + oy) - oy, y) and np.array_equal((yb + oy) - oy, yb)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", gb.StaticRangeWarning)
+            sets.append(gb.pe_pareto(_QUADRATIC, gb.Record(u, y + oy), gb.StaticPoints(_UB, yb + oy), lambdas=lams))
+    a, b = sets
+    # at y + 0 the raw θ is exact enough: the set's J's are the evaluator's of its members on the data as given
+    ev = gb.evaluate_thetas(_QUADRATIC, a.thetas, gb.Record(u, y), gb.StaticPoints(_UB, yb))
+    for name in ("J1", "JS", "JSF"):
+        np.testing.assert_allclose(getattr(a, name), ev[name], rtol=1e-9, atol=0)
+        np.testing.assert_allclose(getattr(b, name), getattr(a, name), rtol=1e-9, atol=0)
+    np.testing.assert_allclose(b.extra["JSF_QR"], a.extra["JSF_QR"], rtol=1e-9, atol=0)

@@ -22,6 +22,7 @@ from ..core._records import (Dataset, Record, RecordPrint, StaticPoints, as_reco
 from ..core._validation import (Relocked, FrozenMap, check_bool, check_fields, check_int, check_mean_square, check_real,
                                 check_weight, frozen, real_array)
 from ..core._terms import Structure
+from ..selection._centring import centred_data, centred_points
 
 __all__ = ["ParetoSet", "nondominated_mask", "OBJECTIVES"]
 
@@ -183,6 +184,7 @@ class ParetoSet(Relocked):
         extra: Mapping[str, np.ndarray] | None = None,
         threads: int = 1,
         failures: Mapping[int, str] | None = None,
+        centred: tuple[np.ndarray, Mapping[str, float]] | None = None,
     ) -> "ParetoSet":
         """Evaluate θs with :func:`graybox.evaluate_thetas` and build the set.
 
@@ -192,7 +194,10 @@ class ParetoSet(Relocked):
         and J_S are the sample-weighted means over the records (each
         counted from its own max-lag on). ``static=None`` leaves J_SF as NaN. Rows listed in
         ``failures`` (index -> reason) are kept as failed members (θ NaN, J's inf). ``structure``
-        may be a Structure, a sequence of terms, a Model or a result that carries one.
+        may be a Structure, a sequence of terms, a Model or a result that carries one. ``centred``:
+        (θ_c, offsets), the members as a fit on the signals less ``offsets`` holds them (a structure closed
+        under shifts, :func:`~graybox.selection._centring.shift_map`), whose J's are computed there, on the
+        records and points less the offsets (the same J's, without the offsets' powers that ``thetas`` carry).
         """
         structure = as_structure(structure)
         th = np.atleast_2d(np.asarray(thetas, float)).copy()
@@ -202,18 +207,26 @@ class ParetoSet(Relocked):
         bad[list(fails)] = True
         th[bad] = 0.0  # evaluated as a harmless null model, then reported as failed
         recs = as_records(data)
+        run, run_recs, run_static = th, recs, static
+        if centred is not None:
+            run = np.atleast_2d(np.asarray(centred[0], float)).copy()
+            if run.shape != th.shape:
+                raise ValueError(f"centred parameters must have the shape of thetas, {th.shape}, got {run.shape}")
+            run[bad] = 0.0
+            run_recs = centred_data(recs, centred[1], keep=frozenset(centred[1]))  # each signal less its offset
+            run_static = None if static is None else centred_points(static, centred[1])
         L = structure.max_lag
         j1 = np.zeros(K)
         js = np.zeros(K)
         total = 0
-        for r in recs:
-            ev = evaluate_thetas(structure, th, r, None, one_step=True, threads=threads)
+        for r in run_recs:
+            ev = evaluate_thetas(structure, run, r, None, one_step=True, threads=threads)
             w = len(r) - L
             j1 += w * ev["J1"]
             with np.errstate(invalid="ignore"):
                 js += w * ev["JS"]
             total += w
-        jsf = np.full(K, np.nan) if static is None else evaluate_thetas(structure, th, None, static)["JSF"]
+        jsf = np.full(K, np.nan) if static is None else evaluate_thetas(structure, run, None, run_static)["JSF"]
         lam = np.full(K, np.nan) if lambdas is None else np.asarray(lambdas, float)
         th[bad] = np.nan
         out = cls(structure, th, lam, j1 / total, js / total, jsf, method, extra or {}, fails,

@@ -75,8 +75,8 @@ from ..core._records import (Dataset, Record, StaticPoints, as_records, carried_
 from ..core._gram import as_gram_records, available_memory, is_dask_data, r_factor
 from ..core._regressors import refuse_non_finite_columns, stacked_regressors
 from ..core._terms import Structure
-from ..selection._centring import (_centre_of, centred_dask, centred_data, dask_levels, is_closed, is_held, shift_map,
-                                   signal_offsets)
+from ..selection._centring import (_centre_of, centred_dask, centred_data, centred_points, dask_levels, is_closed,
+                                   is_held, shift_map, signal_offsets)
 from ..core._validation import (Relocked, check_bool, check_choice, check_fields, check_int, check_lambdas, check_real,
                                 check_theta, locked, warn)
 
@@ -1499,6 +1499,17 @@ def pe_members(structure, data, static=None, *, lambdas=None, constraints=None, 
     own check refuses, e.g. a free Σ_y of eq. (22) at 1) and those members' reasons, {index: reason}: what
     :func:`pe_pareto`, ``select_graybox``'s PE rows and the SE starts keep as failed members. ``ValueError``
     (their reasons) when every member is such; the options are :func:`pe_thetas`'."""
+    thetas, failures, _ = _pe_fit(structure, data, static, lambdas=lambdas, constraints=constraints, solver=solver,
+                                  solver_options=solver_options, weights=weights, ubar=ubar, warm_start=warm_start,
+                                  reference=reference)
+    return thetas, failures
+
+
+def _pe_fit(structure, data, static=None, *, lambdas=None, constraints=None, solver="clarabel", solver_options=None,
+            weights="mse", ubar=None, warm_start=True, reference="free"
+            ) -> tuple[np.ndarray, dict[int, str], tuple[np.ndarray, Mapping[str, float]] | None]:
+    """:func:`pe_members`, and for a fit on the centred signals (a closed structure, :func:`_data`) the members'
+    parameters there with the offsets (θ_c, offsets), else None: what :func:`pe_pareto` evaluates them by."""
     solver = _check_solver(solver)
     lam = check_lambdas(PE_LAMBDAS if lambdas is None else lambdas)
     warm_start = check_bool(warm_start, "warm_start")
@@ -1549,7 +1560,12 @@ def pe_members(structure, data, static=None, *, lambdas=None, constraints=None, 
             thetas[i] = np.nan
     if len(failures) == lam.size:
         raise ValueError(_every_member_failed(failures, lam))
-    return thetas, failures
+    centred = None
+    if d.A is not None:
+        tc = Z / d.s
+        tc[np.isnan(thetas).any(axis=1)] = np.nan
+        centred = (tc, dict(d.offsets))
+    return thetas, failures, centred
 
 
 def _every_member_failed(failures: dict[int, str], lam: np.ndarray) -> str:
@@ -1645,13 +1661,17 @@ def pe_pareto(
                          "the θs on a record that fits")
     if eval_static is not None:  # they speak of the records' inputs, as the fit's
         _check_point_inputs(as_records(data), eval_static)
-    thetas, failures = pe_members(structure, data, static, lambdas=lambdas, constraints=constraints, solver=solver,
-                                  solver_options=solver_options, weights=weights, ubar=ubar, warm_start=warm_start,
-                                  reference=reference)
+    thetas, failures, centred = _pe_fit(structure, data, static, lambdas=lambdas, constraints=constraints,
+                                        solver=solver, solver_options=solver_options, weights=weights, ubar=ubar,
+                                        warm_start=warm_start, reference=reference)
     st = _process_structure(structure)
     pts = static_points(static, data, ubar=ubar, needed_by="the PE problem")
     ev = pts if eval_static is None else eval_static
+    # the J's of the members as fitted, on the centred signals for a closed structure: the raw θ carries the offsets'
+    # powers, and its J's moved with the output's zero (at y + 2^20 by 7e-4 relative for a quadratic in y, J_SF^QR 2 %)
+    jsf_qr = (qr_static_error(st, thetas, pts) if centred is None else
+              qr_static_error(st, centred[0], centred_points(pts, centred[1])))
     return ParetoSet.from_thetas(
         st, thetas, check_lambdas(PE_LAMBDAS if lambdas is None else lambdas), data, ev, method=f"PE ({solver}, {weights})",
-        extra={"JSF_QR": qr_static_error(st, thetas, pts)}, threads=threads, failures=failures,
+        extra={"JSF_QR": jsf_qr}, threads=threads, failures=failures, centred=centred,
     )

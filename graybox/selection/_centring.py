@@ -21,7 +21,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from ..core._gram import DaskRecord, is_dask_data
-from ..core._records import Dataset, Record, as_records
+from ..core._records import Dataset, Record, StaticPoints, as_records
 from ..core._least_squares import column_scales, rank_tolerance
 from ..core._regressors import stacked_regressors
 from ..core._terms import Structure, Term
@@ -133,6 +133,17 @@ def centred_data(data: object, offsets: Mapping[str, float], keep: frozenset = f
                      + (["y"] if is_held(np.concatenate([r.y for r in records])) else [])) - keep
     shifted = [_shift_record(r, offsets, held) for r in records]
     return shifted[0] if isinstance(data, (Record, Dataset)) else shifted
+
+
+def centred_points(points: StaticPoints, offsets: Mapping[str, float]) -> StaticPoints:
+    """Static points on the signals less ``offsets`` (as :func:`centred_data`'s records, no signal zeroed): ū less
+    the input's offset (one input: the records' one, whatever the points call it; several: by name), ȳ less y's."""
+    ub = np.asarray(points.ubar, float)
+    if ub.ndim == 1:
+        ub = ub - next(v for k, v in offsets.items() if k != "y")
+    else:
+        ub = ub - np.array([offsets[n] for n in points.input_names])
+    return replace(points, ubar=ub, ybar=np.asarray(points.ybar, float) - offsets["y"])
 
 
 def check_included(include: Sequence[Term | str], process: Structure, data: object,
