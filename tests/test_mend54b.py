@@ -231,3 +231,12 @@ def test_pe_pareto_reports_the_errors_of_its_own_coordinates_at_a_far_output_off
         np.testing.assert_allclose(getattr(a, name), ev[name], rtol=1e-9, atol=0)
         np.testing.assert_allclose(getattr(b, name), getattr(a, name), rtol=1e-9, atol=0)
     np.testing.assert_allclose(b.extra["JSF_QR"], a.extra["JSF_QR"], rtol=1e-9, atol=0)
+
+
+def test_pareto_set_from_centred_thetas_refuses_offsets_that_do_not_name_every_signal():
+    u, y, yb = _quadratic_plant()
+    th = np.zeros((1, len(_QUADRATIC)))
+    with pytest.raises(ValueError, match=r"missing \['u'\]"):
+        gb.ParetoSet.from_thetas(_QUADRATIC, th, [0.5], gb.Record(u, y), None, centred=(th, {"y": 0.0}))
+    with pytest.raises(ValueError, match="shape of thetas"):
+        gb.ParetoSet.from_thetas(_QUADRATIC, th, [0.5], gb.Record(u, y), None, centred=(th[:, :2], {"y": 0.0, "u": 0.0}))

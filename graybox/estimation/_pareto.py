@@ -213,6 +213,9 @@ class ParetoSet(Relocked):
             if run.shape != th.shape:
                 raise ValueError(f"centred parameters must have the shape of thetas, {th.shape}, got {run.shape}")
             run[bad] = 0.0
+            missing = sorted({"y", *recs[0].input_names} - set(centred[1]))
+            if missing:
+                raise ValueError(f"centred offsets must name y and every input of the records; missing {missing}")
             run_recs = centred_data(recs, centred[1], keep=frozenset(centred[1]))  # each signal less its offset
             run_static = None if static is None else centred_points(static, centred[1])
         L = structure.max_lag
