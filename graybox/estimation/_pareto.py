@@ -20,7 +20,7 @@ from ..models._model import Model, model_input_names
 from ..core._records import (Dataset, Record, RecordPrint, StaticPoints, as_records, carried_from, check_fitted_on,
                              check_units, record_print)
 from ..core._validation import (Relocked, FrozenMap, check_bool, check_fields, check_int, check_mean_square, check_real,
-                                check_weight, frozen, real_array)
+                                check_weight, float_array, frozen, real_array)
 from ..core._terms import Structure
 from ..selection._centring import centred_data, centred_points
 
@@ -209,7 +209,10 @@ class ParetoSet(Relocked):
         recs = as_records(data)
         run, run_recs, run_static = th, recs, static
         if centred is not None:
-            run = np.atleast_2d(np.asarray(centred[0], float)).copy()
+            if not (isinstance(centred, tuple) and len(centred) == 2 and isinstance(centred[1], Mapping)):
+                raise TypeError("centred must be a pair (the members' centred parameters, shape of thetas; the "
+                                f"offsets, a map of y and each input to its level), got {centred!r}")
+            run = np.atleast_2d(float_array(centred[0], "centred parameters")).copy()
             if run.shape != th.shape:
                 raise ValueError(f"centred parameters must have the shape of thetas, {th.shape}, got {run.shape}")
             run[bad] = 0.0
