@@ -8,14 +8,7 @@ import numpy as np
 import pytest
 
 import graybox as gb
-
-
-def _cannot_be_made_writeable(a, name):
-    for target in (a, a.base):
-        if isinstance(target, np.ndarray):
-            with pytest.raises(ValueError, match="WRITEABLE"):
-                target.flags.writeable = True
-    assert not a.flags.writeable, name
+from test_review54a import _cannot_be_made_writeable
 
 
 @pytest.mark.parametrize("how", [lambda o: pickle.loads(pickle.dumps(o)), copy.deepcopy], ids=["pickle", "deepcopy"])
