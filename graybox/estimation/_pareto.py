@@ -196,7 +196,7 @@ class ParetoSet(Relocked):
         ``failures`` (index -> reason) are kept as failed members (θ NaN, J's inf). ``structure``
         may be a Structure, a sequence of terms, a Model or a result that carries one. ``centred``:
         (θ_c, offsets), the members as a fit on the signals less ``offsets`` holds them (a structure closed
-        under shifts, :func:`~graybox.selection._centring.shift_map`), whose J's are computed there, on the
+        under shifts), whose J's are computed there, on the
         records and points less the offsets (the same J's, without the offsets' powers that ``thetas`` carry).
         """
         structure = as_structure(structure)
