@@ -33,3 +33,19 @@ def test_a_gradient_checkpoint_resumes_under_another_seed_and_a_ga_one_does_not(
         assert "seed" in str(exc)
     else:
         raise AssertionError("a GA checkpoint of seed 0 was resumed by seed 1")
+
+
+def test_an_archive_of_another_tool_is_refused_naming_what_it_lacks(tmp_path):
+    # an .npz that numpy (or another tool) wrote under the name: refused with the reason in words, not a KeyError's
+    # bare repr "('meta')"
+    terms, rec, static = _problem()
+    ck = tmp_path / "front.npz"
+    np.savez(ck, a=np.arange(3))
+    try:
+        gb.se_pareto(terms, rec, static, lambdas=[1.0], method="gradient", checkpoint=ck)
+    except CheckpointError as exc:
+        assert "holds no SE sweep's metadata" in str(exc) and "'a'" in str(exc)
+        assert "('meta')" not in str(exc)
+    else:
+        raise AssertionError("an archive without an SE sweep's metadata was taken for a checkpoint")
+    assert np.array_equal(np.load(ck)["a"], np.arange(3))  # the user's file is left as it was

@@ -894,6 +894,9 @@ def _load_checkpoint(path: Path, meta: dict, n_terms: int | None = None, coords:
         # another function's file, perhaps hours of work: not offered for deletion
         raise CheckpointError(f"checkpoint {path} is select_graybox's checkpoint, not an SE sweep's; choose another "
                               "checkpoint path")
+    if "meta" not in arrays:  # another tool's archive under the name: said in words, not as a KeyError's "('meta')"
+        raise unreadable(ValueError("it holds no SE sweep's metadata; its arrays: "
+                                    + (", ".join(map(repr, arrays)) or "none")))
     try:
         stored = json.loads(str(arrays["meta"]))
         raw = {k: arrays[k] for k in _CHECKPOINT_ARRAYS if k in arrays}
