@@ -360,3 +360,17 @@ def test_output_errors_starts_table_reports_the_theta_each_start_offers():
     assert win["JS_choose"] == pytest.approx(res.JS_choose, rel=1e-12)
     assert win["JS"] == pytest.approx(res.JS, rel=1e-9)
     assert win["JS"] == pytest.approx(gb.js(res.model, fit_rec), rel=1e-9)
+
+
+def test_a_least_squares_start_beyond_the_float_range_is_refused_in_words():
+    # u about 1e-100 and y about 1e150: u(k-1)²'s parameter, about 1e349, is no float. The centred problem's least
+    # squares overflowed in from_z with numpy's bare "overflow encountered in matmul" (an error under -W error;
+    # otherwise an inf start reported as "least squares: free run diverges")
+    st = gb.Structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2", "y(k-2)"])
+    rng = np.random.default_rng(1)
+    u = rng.uniform(-1.0, 1.0, 60)
+    y = gb.Model(st, np.array([0.1, 1.2, 0.25, 0.1, -0.4])).simulate(u, np.zeros(2))
+    rec = gb.Record(1e-100 * u, 1e150 * y)
+    with pytest.raises(ValueError, match=r"least squares: the parameter\(s\) of \['u\(k-1\)\^2'\] are beyond the "
+                                         "float range.*rescale the signals"):
+        output_error(st, rec, n_starts=1, margin=None)

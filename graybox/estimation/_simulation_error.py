@@ -66,7 +66,8 @@ from ..core._simulation_kernels import (
     record_inputs,
     simulate_one,
 )
-from ..core._least_squares import check_rows, column_scales, one_blas_thread, output_scale, scaled_lstsq
+from ..core._least_squares import (check_rows, column_scales, one_blas_thread, output_scale, refuse_beyond_float_range,
+                                     scaled_lstsq)
 from ..models._coerce import as_structure, records_of, static_points
 from ._pareto import ParetoSet
 from ..core._progress import progress_bar
@@ -620,7 +621,10 @@ class SEProblem:
         form at λ1 = 1/2); neither: ``ValueError`` saying what is missing."""
         if "ls" not in self._memo:
             if self.records_identify() and self.z_map is not None:
-                self._memo["ls"] = self.from_z(self.ls_z())
+                with np.errstate(over="ignore"):  # a θ beyond the float range (u(k-1)² of u ≈ 1e-100, y ≈ 1e150)
+                    th = self.from_z(self.ls_z())
+                refuse_beyond_float_range(self.structure.terms, th, prefix="least squares: ")
+                self._memo["ls"] = th
             elif self.records_identify():
                 self._memo["ls"] = scaled_lstsq(self.psi, self.target)
             else:
