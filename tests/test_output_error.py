@@ -374,3 +374,6 @@ def test_a_least_squares_start_beyond_the_float_range_is_refused_in_words():
     with pytest.raises(ValueError, match=r"least squares: the parameter\(s\) of \['u\(k-1\)\^2'\] are beyond the "
                                          "float range.*rescale the signals"):
         output_error(st, rec, n_starts=1, margin=None)
+    with pytest.raises(ValueError, match=r"\['u\(k-1\)\^2'\] are beyond the float range"):
+        se_pareto(st, rec, gb.StaticPoints(1e-100 * np.array([-0.5, 0.0, 0.5]), 1e150 * np.ones(3)),
+                  lambdas=[0.5], method="gradient")

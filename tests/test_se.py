@@ -491,3 +491,22 @@ def test_fit_stops_at_the_last_accepted_point_when_the_jacobian_overflows(proble
     assert calls["n"] == 3 and nfev < 50
     assert cost == pytest.approx(problem.cost(th[None], 1.0)[0], rel=1e-12)
     assert cost < problem.cost(th0[None], 1.0)[0]  # two accepted steps were kept
+
+
+@pytest.mark.parametrize("scale", [1.0, 1e14, 1e20])
+def test_identifiability_with_static_points_does_not_depend_on_the_output_unit(scale):
+    # a centred problem judged its records' rows in z (unit-RMS columns) but the static rows Q R in the centred
+    # θ: with y in a unit 1e14 times smaller the static rows swamped the records' y columns, and a problem the
+    # records alone identify was refused, "rank 4 for 5 terms" (adding rows can never lower a rank)
+    from graybox import StaticPoints, Structure
+
+    st = Structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2", "y(k-2)"])
+    u = np.random.default_rng(1).uniform(-1.0, 1.0, 60)
+    y = Model(st, np.array([0.1, 1.2, 0.25, 0.1, -0.4])).simulate(u, np.zeros(2))
+    ub = np.array([-0.5, 0.0, 0.5])
+    sp = StaticPoints(ub, scale * (0.1 + 0.25 * ub + 0.1 * ub ** 2) / 0.2)
+    p = SEProblem(st, Record(u, scale * y), sp)
+    assert p.records_identify()
+    p.check_identified()  # the records with the points: no ValueError
+    front = se_pareto(st, Record(u, scale * y), sp, lambdas=[0.5], method="gradient")
+    assert front.JS[0] / scale ** 2 < 1e-20  # noise-free: the true system, its J_S round-off

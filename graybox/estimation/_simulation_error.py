@@ -598,7 +598,9 @@ class SEProblem:
             # judged on the problem the optimisers solve: for a centred one (:meth:`_centre_basis`) its regression
             # and the static points on the centred signals, the same rank at every offset (on the raw ones a closed
             # quadratic in y(k-1), y(k-2) at y + 1e6 read as rank 6 of 7, and the sweep was refused)
-            psi = self.psi if self.z_map is None else self.z_psi
+            # in the centred θ (z_psi · s_c), the coordinates of run_points' static rows Q R: the records' rows in z
+            # (unit-RMS columns) beside those rows were swamped by them at y in a unit 1e14 times smaller (rank 4 of 5)
+            psi = self.psi if self.z_map is None else self.z_psi * self.run_scale
             try:
                 identified_by(self.structure, psi, psi.shape[0], points=self.run_points() if weighted else None,
                               inputs=self.record.input_names, what=what)
