@@ -32,7 +32,11 @@ __all__ = [
     "eq1",
     "EQ1_COEFFICIENTS",
     "eq1_points",
+    "TS",
 ]
+
+#: The paper's sampling period (s): "Ts = 50 ms" (Section II-B); its models' parameters hold at it.
+TS = 0.05
 
 #: Eq. (1): H(u) = β u² + α u + κ, coefficients (κ, α, β) in mlc, mlc/rpm, mlc/rpm².
 EQ1_COEFFICIENTS = (-1.3312, 1.4933e-3, 7.2652e-6)
@@ -141,6 +145,12 @@ def paper_model(equation: int, column: str = "ELS", allow_misprinted: bool = Fal
     allow_misprinted : bool
         Table II's SE column is misprinted (its static curve diverges); asking for it raises
         unless this is True.
+
+    Returns
+    -------
+    Model
+        The printed parameters, for u in rpm and y in mlc, sampled every :data:`TS` = 0.05 s (its ``Ts``: local
+        models' time constants in seconds, and a record at another period refused).
     """
     equation = check_int(equation, "equation")  # 15.0 is 15 (its name said 'ELS (15.0)'); text is no equation
     allow_misprinted = check_bool(allow_misprinted, "allow_misprinted")  # 'no' is truthy: it let the misprint in
@@ -158,4 +168,4 @@ def paper_model(equation: int, column: str = "ELS", allow_misprinted: bool = Fal
         raise ValueError(f"Table {tab}'s {column} column is misprinted (its static curve diverges); "
                          "pass allow_misprinted=True to get it anyway")
     # the paper's parameters hold for the speed in rpm and the pressure in mlc (its eq. (1) and Figs. 2-3)
-    return Model(structure, table[column], name=f"{column} ({equation}) [paper]", units=("rpm", "mlc"))
+    return Model(structure, table[column], name=f"{column} ({equation}) [paper]", units=("rpm", "mlc"), Ts=TS)

@@ -28,7 +28,7 @@ def test_two_d_where_one_d_expected():
 
 def test_record_shorter_than_max_lag():
     m = reference.paper_model(15)
-    r = Record(np.full(6, 1000.0), np.full(6, 5.0))
+    r = Record(np.full(6, 1000.0), np.full(6, 5.0), Ts=reference.TS)
     with pytest.raises(ValueError, match="fewer than max lag"):
         m.predict(r)
     with pytest.raises(ValueError, match="fewer than max lag"):

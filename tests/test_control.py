@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import re
 import sys
 
@@ -334,10 +335,25 @@ def test_neural_model_gets_a_clear_error():
             fn()
 
 
+def test_the_papers_models_carry_its_period_so_their_time_constants_come_in_seconds():
+    # the paper samples every 50 ms (Section II-B): its models' local models need no Ts= and give seconds
+    for eq in (15, 17):
+        m = reference.paper_model(eq)
+        assert m.Ts == reference.TS == 0.05
+        lm = gb.local_model(m, 1200.0)
+        by_hand = gb.local_model(dataclasses.replace(m, Ts=None), 1200.0, Ts=0.05)
+        assert lm.Ts == 0.05 and lm.time_constant == by_hand.time_constant
+        # the dominant pole's time constant: −Ts / ln|p|, in seconds
+        assert lm.time_constant == pytest.approx(-0.05 / np.log(np.abs(lm.poles).max()), rel=1e-12)
+    # a record sampled at another period is refused rather than simulated at the wrong one
+    with pytest.raises(ValueError, match="every 0.05 s"):
+        reference.paper_model(15).simulate(gb.Record(np.full(20, 1000.0), np.full(20, 5.0)))
+
+
 def test_arguments_are_checked():
     m = reference.paper_model(15)
-    with pytest.raises(ValueError, match="Ts"):
-        gb.local_model(m, 1000.0)
+    with pytest.raises(ValueError, match="Ts"):  # a model of unknown period
+        gb.local_model(dataclasses.replace(m, Ts=None), 1000.0)
     with pytest.raises(ValueError, match="ubar"):
         gb.local_model(m, [1000.0, 1100.0], Ts=0.05)
     with pytest.raises(ValueError, match="Ts"):

@@ -103,7 +103,7 @@ def test_min_correlation_picks_least_correlated_member():
     m = reference.paper_model(15, "PE")
     u = np.repeat(rng.uniform(750, 1650, 12), 60)
     y0 = np.full(6, float(m.static_curve([u[0]])[0]))
-    rec = Record(u, m.simulate(u, y0) + 0.05 * rng.standard_normal(u.size))
+    rec = Record(u, m.simulate(u, y0) + 0.05 * rng.standard_normal(u.size), Ts=reference.TS)
     thetas = np.vstack([m.theta, m.theta * (1 + 0.02 * rng.standard_normal(17)), m.theta * 1.001])
     ps = ParetoSet.from_thetas(m.structure, thetas, [1.0, 0.5, 0.1], rec, reference.eq1_points())
     _d = decide_min_correlation(ps, rec)

@@ -24,7 +24,7 @@ def test_errors_count_from_max_lag(paper_record):
     assert j1(m, paper_record) < 1e-18 and js(m, paper_record) < 1e-18
     y = paper_record.y.copy()
     y[:6] += 100.0  # initial conditions change: the free run changes but errors before max lag are not counted
-    r = Record(paper_record.u, y)
+    r = Record(paper_record.u, y, Ts=paper_record.Ts)
     assert js(m, r) > 0
 
 

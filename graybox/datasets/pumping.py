@@ -204,7 +204,7 @@ from ..core._files import write_atomically
 from ..core._records import Record, StaticPoints
 from ..core._validation import (Relocked, as_1d_finite, check_bool, check_count, check_int, check_real, check_seed,
                                 locked, real_array)
-from ..reference import EQ1_COEFFICIENTS
+from ..reference import EQ1_COEFFICIENTS, TS
 from ..core._reprs import short_repr
 
 __all__ = [
@@ -223,8 +223,6 @@ __all__ = [
     "NOISE_STD",
 ]
 
-#: Sampling period of the rig (s).
-TS = 0.05
 #: Samples in the dynamic record; the first N_IDENT identify, the rest validate.
 N_SAMPLES = 4000
 N_IDENT = 3200
