@@ -478,6 +478,24 @@ def test_a_noise_input_is_not_joined_to_a_loop_error_named_e():
         gb.narx_iosystem(Model(["y(k-1)", "noise(k-1)"], [0.5, 1.0], input_names=["noise"]), Ts=1.0, noise=True)
 
 
+def test_a_transient_inputs_time_constant_comes_back_whole_from_its_name():
+    # the system reads τ from the input's name: written to 6 digits, τ = 1/3 came back as 0.333333 and the
+    # system's z drifted from the record's by 1e-6 relative; the name now holds every digit τ needs (30 stays 30)
+    assert gb.transient_name("u", 30.0) == "u_tau30" and gb.transient_name("u", 2.5) == "u_tau2p5"
+    # two τ alike to 6 digits are two channels (they were refused as giving one name)
+    two = gb.transient_inputs(gb.Record(u=np.arange(5.0), y=np.zeros(5)), taus=[2.0, 2.0000001])
+    assert two.input_names == ("u", "u_tau2", "u_tau2p0000001")
+    u = np.r_[np.full(3, 1000.0), np.full(6, 1100.0), np.full(6, 950.0)]
+    rec = gb.transient_inputs(gb.Record(u=u, y=np.full(u.size, 7.75), Ts=0.1), taus=[1 / 3])
+    name = rec.input_names[1]
+    model = Model(["y(k-1)", "u(k-1)", f"{name}(k-1)"], [0.5, 0.001, -1.0], input_names=("u", name), Ts=0.1)
+    x0 = gb.narx_initial_state(model, rec)
+    r = ct.input_output_response(gb.narx_iosystem(model), 0.1 * np.arange(u.size - 1), u[1:], x0)
+    y = model.simulate(rec)
+    assert np.ptp(y[1:]) > 1000  # the transient term carries the output
+    np.testing.assert_allclose(r.outputs, y[1:], rtol=1e-13, atol=0)
+
+
 def test_a_transient_input_is_computed_inside_the_nonlinear_system_from_its_source():
     # narx_iosystem made u_tau3 a system input of its own: a loop whose controller sets u left it unconnected
     # (python-control's 'Unused input(s)' warning, then z = 0), so the loop ran without the model's transient effect

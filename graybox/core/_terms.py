@@ -71,12 +71,17 @@ def transient_name(input_name: str, tau: float) -> str:
     Returns
     -------
     str
-        ``{input_name}_tau{τ}``, τ written to 6 significant digits with ``p`` for the decimal point.
+        ``{input_name}_tau{τ}``, τ written with ``p`` for the decimal point: to 6 significant digits where they
+        give τ back exactly (``u_tau30``, ``u_tau2p5``), else with every digit it takes (``u_tau0p3333333333333333``
+        for τ = 1/3), so that τ read back from the name (a model's transient input in a control system) is τ itself.
     """
     if not isinstance(input_name, str):
         raise TypeError(f"input_name must be a str, got {input_name!r} ({type(input_name).__name__})")
     tau = check_real(tau, "tau (seconds)", low=0, low_open=True)
-    tag = f"{tau:g}".replace(".", "p").replace("-", "m").replace("+", "")
+    text = f"{tau:g}"
+    if float(text) != tau:  # 6 digits would lose τ: 1/3 read back as 0.333333 (ρ = e^(−Ts/τ) 1e-6 off)
+        text = repr(tau)
+    tag = text.replace(".", "p").replace("-", "m").replace("+", "")
     return f"{input_name}_tau{tag}"
 
 

@@ -117,8 +117,6 @@ def transient_inputs(data: _Data, taus: Sequence[float], *, input_names: Sequenc
     if len(set(chosen)) != len(chosen) or not chosen:
         raise ValueError(f"input_names must name at least one input, each once, got {chosen}")
     new = [(transient_name(n, t), n, t) for n in chosen for t in tau_list]
-    if len({nm for nm, _, _ in new}) != len(new):
-        raise ValueError(f"taus {tau_list} give channels of the same name (τ is named to 6 significant digits)")
     taken = set(names) & {nm for nm, _, _ in new}
     if taken:
         raise ValueError(f"the data already have input(s) {sorted(taken)}: transient inputs added twice?")
@@ -181,7 +179,7 @@ def recomputed_transients(u: np.ndarray, names: Sequence[str], Ts: float,
                           taus: Mapping[str, tuple[str, float]] | None = None) -> np.ndarray:
     """The inputs ``u`` (shape (N,) or (N, m)) with every transient input among ``names`` computed afresh from its
     input at the period ``Ts`` (s): what :func:`transient_inputs` gives a record of these samples. ``taus``: name →
-    (input, τ) (a Dataset's ``extra["transient_inputs"]``), else τ is read from the name (6 digits). A record
+    (input, τ) (a Dataset's ``extra["transient_inputs"]``), else τ is read from the name (exact: transient_name writes every digit τ needs). A record
     decimated keeps every q-th sample of its inputs, but z is no such sample: its (1 − ρ) and ρ are of Ts."""
     names = tuple(names)
     if u.ndim == 1:
