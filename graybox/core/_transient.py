@@ -179,8 +179,9 @@ def recomputed_transients(u: np.ndarray, names: Sequence[str], Ts: float,
                           taus: Mapping[str, tuple[str, float]] | None = None) -> np.ndarray:
     """The inputs ``u`` (shape (N,) or (N, m)) with every transient input among ``names`` computed afresh from its
     input at the period ``Ts`` (s): what :func:`transient_inputs` gives a record of these samples. ``taus``: name →
-    (input, τ) (a Dataset's ``extra["transient_inputs"]``), else τ is read from the name (exact: transient_name writes every digit τ needs). A record
-    decimated keeps every q-th sample of its inputs, but z is no such sample: its (1 − ρ) and ρ are of Ts."""
+    (input, τ) (a Dataset's ``extra["transient_inputs"]``), else τ is read from the name (exactly: transient_name
+    writes every digit τ needs). A record decimated keeps every q-th sample of its inputs, but z is no such sample:
+    its (1 − ρ) and ρ are of Ts."""
     names = tuple(names)
     if u.ndim == 1:
         return u
