@@ -191,11 +191,13 @@ def simulate(
         the output, and the constant) and G(j) the steady gain of the linear output feedback at
         sample j's inputs (1 / (1 − c(j)), c(j) the sum of the coefficients of the single past
         outputs y(j−l), input-dependent terms θ y(j−l) u(j−i) included, where that lies in (0, 1),
-        else 1: the level a constant push holds a stable slow plant at; and without input-dependent
-        feedback at least Π 1 / (1 − |p|) over the poles p of the stable linear feedback, the level
-        any push holds it within, a resonance driven at its frequency too), and the size at which the model's nonlinear
-        output feedback matters (a limit cycle's scale), so it does not depend on the output's
-        units, also for a run from rest (y0 = 0).
+        else 1: the level a constant push holds a stable slow plant at; and at least Π 1 / (1 − |p|)
+        over the poles p of the stable linear feedback, the level any push holds it within, a
+        resonance driven at its frequency too: of the constant feedback, or, where input-dependent
+        terms feed back and no single past output lies beyond lag 2, of the feedback at sample j's
+        inputs, to within a factor 4; 1 where that has a pole on or outside the unit circle), and
+        the size at which the model's nonlinear output feedback matters (a limit cycle's scale), so
+        it does not depend on the output's units, also for a run from rest (y0 = 0).
     input_names : tuple of str, optional
         Names of the columns of an array ``u`` (default: a model's own ``input_names``, else ``"u"``
         for 1-D, ``u1 … um`` for (N, m)); ignored for a Record, which names its inputs.

@@ -295,45 +295,76 @@ def feedback_scales(code: Code, thetas: np.ndarray, u: np.ndarray) -> np.ndarray
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def push_gain(feedback, margin):  # pragma: no cover - compiled
-    """How far the linear output feedback at a sample amplifies the push: 1 / min(D, ``margin``) with D = 1 −
-    ``feedback`` where 0 < D < 1, else 1 (dimensionless); ``margin`` is :func:`linear_margins`' (1: none).
+def pole_margin(a1, a2):  # pragma: no cover - compiled
+    """At most Π (1 − |p|) over the poles p of y(k) = a1 y(k−1) + a2 y(k−2), and within a factor 4 of it, where both
+    lie inside the unit circle; else 2 (dimensionless): :func:`linear_margins`' rule for a recursion of order two at
+    most, without a square root (it runs at every sample of every member of a population)."""
+    inside = abs(a1) < 1.0 - a2 and abs(a2) < 1.0  # the step-down test of z² − a1 z − a2 (NaN: not inside)
+    b = 1.0 + a2
+    # a complex pair, |p|² = −a2: (1 − |p|)² = (1 − |p|²)² / (1 + |p|)²; real poles of one sign: |p1| + |p2| = |a1|,
+    # |p1 p2| = −a2, exactly; of both signs: 1 + a2 − √disc = ((1 − a2)² − a1²) / (1 + a2 + √disc), √disc < 1 + a2
+    pm = b * b / 4.0 if a1 * a1 + 4.0 * a2 < 0.0 else (
+        1.0 - abs(a1) - a2 if a2 <= 0.0 else ((1.0 - a2) * (1.0 - a2) - a1 * a1) / (2.0 * b))
+    return max(pm, 2.2250738585072014e-308) if inside else 2.0
 
-    ``feedback`` is the sum of the coefficients of the single past outputs y(k−l) at that sample, terms θ y(k−l)
-    and input-dependent ones θ y(k−l) · (inputs) alike (C_g(k) of the monomials of output power 1), so the gain is
-    the one the inputs the run sees give it. A stable linear recursion held by a constant push X settles at X / D:
-    a slow plant sampled fast (two time constants of 1000 samples: D = 1e-6) rests at 10⁶ times its push, which the
-    bound must not call divergence. D <= 0 is a root at z >= 1 (no steady level: the push's own scale is kept, as an
-    unstable recursion's, so a diverging run is caught as early as before), and so is a ``margin`` above 1, a
-    recursion whose constant feedback has a pole on or outside the unit circle though 0 < D < 1 (a growing pair
-    1.001 e^{±0.01j}: D = 1e-4, and the gain 1e4 let it run to 1.5e9 uncaught).
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def push_gain(c1, c2, margin):  # pragma: no cover - compiled
+    """How far the linear output feedback at a sample amplifies the push (dimensionless); ``margin`` is
+    :func:`linear_margins`' (1: none).
+
+    ``c1 + c2`` is the sum of the coefficients of the single past outputs y(k−l) at that sample, terms θ y(k−l) and
+    input-dependent ones θ y(k−l) · (inputs) alike (C_g(k) of the monomials of output power 1), so the gain is the
+    one the inputs the run sees give it; ``c1`` those of lag 1. With ``margin`` −1 (the feedback runs through the
+    inputs and reads lags 1 and 2 alone) the gain is 1 / :func:`pole_margin` (c1, c2), the gain of that sample's
+    feedback for any push (a feedback near −1 through y·u² at u = ±1, driven at its own frequency, builds up to
+    1 / (1 − |a|) ≫ 1 / D), and 1 where it has a pole on or outside the unit circle (a growing pair
+    1.001 e^{±0.01j}, part of it through y·u: D = 1e-4, and the gain 1e4 let it run to 1.5e9 uncaught).
+    Else it is 1 / min(D, ``margin``) with D = 1 − c1 − c2 where 0 < D < 1, else 1: a stable linear
+    recursion held by a constant push X settles at X / D (a slow plant sampled fast, two time constants of 1000
+    samples: D = 1e-6, rests at 10⁶ times its push, which the bound must not call divergence); D <= 0 is a root at
+    z >= 1 (no steady level: the push's own scale is kept, as an unstable recursion's, so a diverging run is caught
+    as early as before), and so is a ``margin`` above 1, a constant feedback with a pole on or outside the unit
+    circle though 0 < D < 1.
     """
+    return 1.0 / _push_margin(c1, c2, margin)
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def _push_margin(c1, c2, margin):  # pragma: no cover - compiled
+    # 1 / push_gain: a run's scale grows where |X| > scale × this, a product, no division per sample
     if margin > 1.0:  # the constant feedback has a pole on or outside the unit circle: no steady level
         return 1.0
-    d = 1.0 - feedback
+    if margin < 0.0:  # the feedback through the inputs: its poles at this sample
+        pm = pole_margin(c1, c2)
+        return 1.0 if pm > 1.0 else pm
+    d = 1.0 - (c1 + c2)
     d = d if 0.0 < d < 1.0 else 1.0
-    return 1.0 / min(d, margin)
+    return min(d, margin)
 
 
 def linear_margins(code: Code, thetas: np.ndarray) -> np.ndarray:
     """1 / the gain of the constant linear output feedback for any input, per row of ``thetas`` (P, n_terms):
     Π (1 − |p|) over the poles p of y(k) = Σ_l a_l y(k−l) (a_l the θ of the terms θ y(k−l)) where all lie inside
     the unit circle, 2 where one does not (no steady level, whatever D: :func:`push_gain` then keeps the push's own
-    scale), 1 where a term y(k−l) · (inputs) feeds back too or θ is not finite. Shape (P,), in (0, 2].
+    scale), 1 where θ is not finite. Where a term y(k−l) · (inputs) feeds back too, the constant terms are no account
+    of the feedback: −1 where no single past output lies beyond lag 2 (:func:`push_gain` reads the poles of the
+    feedback at each sample's inputs), else 1 (its steady gain at each sample). Shape (P,), in (0, 2] or −1.
 
     A push X bounded by |X| <= x holds a stable linear recursion at |y| <= x Σ_j |h(j)| <= x Π 1 / (1 − |p|): for
     real positive poles that is the steady gain 1 / D of :func:`push_gain`, but a lightly damped pair driven at its
     frequency builds up to 1 / |A(e^{jω})|, up to 1 / (1 − |p|)² ≫ 1 / D (poles 0.9999999 e^{±0.5j}: 10¹⁴ against
-    4), which the bound must not call divergence. 1 (no floor) when a term y(k−l) · (inputs) feeds back too: the
-    constant terms are then no account of the feedback, which :func:`push_gain` reads at each sample.
+    4), which the bound must not call divergence.
     """
     th = np.atleast_2d(np.asarray(thetas, dtype=float))
     out = np.ones(th.shape[0])
     single = [t for t in range(th.shape[1]) if code.ny[t] == 1]
-    if not single or any(code.uptr[t] != code.uptr[t + 1] for t in single):
+    if not single:
         return out
     lags = [int(code.ylag[t, 0]) for t in single]
     L = max(lags)
+    if any(code.uptr[t] != code.uptr[t + 1] for t in single):
+        return out if L > 2 else np.where(np.all(np.isfinite(th), axis=1), -1.0, 1.0)
     if th.shape[0] == 1 and L <= 2:  # one run's (simulate, predict): the poles in floats, no array work
         c = [0.0, 0.0]
         for t, l in zip(single, lags):
@@ -374,19 +405,22 @@ def _start_ref(y, start):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def _feedback_margins(C, gny, mm, D, margin):  # pragma: no cover - compiled
-    # D[i] = 1 / push_gain at the samples i < mm: 1 − the sum of the coefficients C_g of the single past outputs
-    # (monomials of output power 1) where that lies in (0, 1), else 1, and at most ``margin``; loops over the
-    # samples (vectorised)
+def _feedback_margins(C, gny, gylag, mm, D, E, margin):  # pragma: no cover - compiled
+    # D[i] = 1 / push_gain at the samples i < mm, from the coefficients C_g of the single past outputs (monomials
+    # of output power 1) summed by lag (1 in D, 2 and beyond in E); loops over the samples (vectorised)
     for i in range(mm):
-        D[i] = 1.0
+        D[i] = 0.0
+        E[i] = 0.0
     for g in range(gny.shape[0]):
         if gny[g] == 1:
-            for i in range(mm):
-                D[i] -= C[g, i]
+            if gylag[g, 0] == 1:
+                for i in range(mm):
+                    D[i] += C[g, i]
+            else:
+                for i in range(mm):
+                    E[i] += C[g, i]
     for i in range(mm):
-        d = D[i]
-        D[i] = 1.0 if margin > 1.0 else min(d if 0.0 < d < 1.0 else 1.0, margin)
+        D[i] = _push_margin(D[i], E[i], margin)
 
 
 @nb.njit(cache=True, nogil=True)
@@ -405,12 +439,13 @@ def _one(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y0, start, bo
     X = np.empty(_CHUNK)
     C = np.empty((G, _CHUNK))
     tmp = np.empty(_CHUNK)
+    tmp2 = np.empty(_CHUNK if auto else 0)
     for k0 in range(start, n, _CHUNK):
         mm = min(_CHUNK, n - k0)
         # pass 1, off the recursion's critical path
         _input_parts(uptr, ulag, upow, usig, grp, theta, uflat, n, k0, mm, X, C, tmp)
         if auto:
-            _feedback_margins(C, gny, mm, tmp, margin)
+            _feedback_margins(C, gny, gylag, mm, tmp, tmp2, margin)
         # pass 2: the recursion over a few output monomials
         for i in range(mm):
             k = k0 + i
@@ -472,7 +507,7 @@ def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, h
     P = np.full(m, scale)
     ref = scale
     D = np.empty(m)
-    _feedback_margins(C, gny, m, D, margin)
+    _feedback_margins(C, gny, gylag, m, D, np.empty(m), margin)
     for i in range(m):
         lvl = abs(X[i]) / D[i]
         if lvl > ref:
@@ -538,8 +573,9 @@ def predict_ahead(code: Code, theta: np.ndarray, u: np.ndarray, y: np.ndarray, s
 @nb.njit(cache=True, nogil=True, inline="always")
 def _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, cacc, bounded):  # pragma: no cover - compiled
     # acc[p] = ŷ_p(k) for every member p, reading past outputs from rows (k - lag) & mask of Y;
-    # when ``bounded`` also xacc[p] = X_p(k), the sum of the terms without y, and cacc[p] the sum of the
-    # coefficients of its single past outputs at sample k (for the bound: :func:`push_gain`).
+    # when ``bounded`` also xacc[p] = X_p(k), the sum of the terms without y, and cacc[0, p], cacc[1, p] the sums of
+    # the coefficients of its single past outputs at sample k of lag 1 and of the others (for the bound:
+    # :func:`push_gain`).
     # The accumulator is a separate array, every access is 2-D indexed and every population
     # loop runs over the whole second axis (range(P) with P = Y.shape[1]): in this form LLVM
     # vectorises each term update, which a loop over a sub-range p0:p1 does not (BENCHMARKS.md).
@@ -550,7 +586,8 @@ def _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, cacc, bounded):  # pragma:
     if bounded:
         for p in range(P):
             xacc[p] = 0.0
-            cacc[p] = 0.0
+            cacc[0, p] = 0.0
+            cacc[1, p] = 0.0
     for t in range(nt):
         c = U[k, t]
         m = ny[t]
@@ -566,10 +603,11 @@ def _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, cacc, bounded):  # pragma:
         elif m == 1:
             a = (k - ylag[t, 0]) & mask
             if bounded:
+                r = 0 if ylag[t, 0] == 1 else 1
                 for p in range(P):
                     v = thT[t, p] * c
                     acc[p] += v * Y[a, p]
-                    cacc[p] += v
+                    cacc[r, p] += v
             else:
                 for p in range(P):
                     acc[p] += thT[t, p] * c * Y[a, p]
@@ -603,18 +641,22 @@ def _bound_start(ref):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def _bound_members(ref, bnd, xacc, cacc, acc, margin):  # pragma: no cover - compiled
+def _bound_members(ref, bnd, xacc, cacc, acc, margin, poles):  # pragma: no cover - compiled
     # The default bound of _one for every member p: its scale ref[p] grows with G_p(k) |X_p(k)| (xacc, the
-    # sum of its terms without y; G_p(k) the push_gain of its linear feedback at sample k, cacc[p]), and a
+    # sum of its terms without y; G_p(k) the push_gain of its linear feedback at sample k, cacc[:, p]), and a
     # sample beyond BOUND_FACTOR × that scale is NaN, and so is every later one, as _one stops there: a stopped
     # member's bound is -1 for good (its NaN need not reach a later sample, e.g. y(k) = a y(k-2) reads only every
-    # other one).
+    # other one). ``poles``: some member's margin is -1 (the structure's feedback runs through the inputs): every
+    # member's is then -1 but a padding member's (θ = 0: the poles' margin is 1 too) or a non-finite one's (not
+    # inside: the same 1), so one loop serves them all, without a branch per member.
     P = acc.shape[0]
     for p in range(P):
-        a = abs(xacc[p]) * push_gain(cacc[p], margin[p])
-        if a > ref[p]:
-            ref[p] = a
-            bnd[p] = scaled_bound(a)
+        x = abs(xacc[p])
+        d = pole_margin(cacc[0, p], cacc[1, p]) if poles else _push_margin(cacc[0, p], cacc[1, p], margin[p])
+        d = d if d <= 1.0 else 1.0
+        if x > ref[p] * d:  # off the common path: a division only where the scale grows
+            ref[p] = x / d
+            bnd[p] = scaled_bound(ref[p])
         if not (abs(acc[p]) <= bnd[p]):
             acc[p] = np.nan
             ref[p] = np.inf
@@ -630,11 +672,12 @@ def _batch_block(thT, U, ny, ylag, Y, start, ref, margin):  # pragma: no cover -
     acc = np.empty(P)
     bounded, ref, bnd = _bound_start(ref)
     xacc = np.empty(P)
-    cacc = np.empty(P)
+    cacc = np.empty((2, P))
+    poles = bounded and margin.shape[0] > 0 and margin.min() < 0.0
     for k in range(start, n):
         _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, cacc, bounded)
         if bounded:
-            _bound_members(ref, bnd, xacc, cacc, acc, margin)
+            _bound_members(ref, bnd, xacc, cacc, acc, margin, poles)
         for p in range(P):
             Y[k, p] = acc[p]
 
@@ -750,11 +793,12 @@ def _batch_sse(thT, U, ny, ylag, y, start, ring, ref, margin):  # pragma: no cov
     acc = np.empty(P)
     bounded, ref, bnd = _bound_start(ref)
     xacc = np.empty(P)
-    cacc = np.empty(P)
+    cacc = np.empty((2, P))
+    poles = bounded and margin.shape[0] > 0 and margin.min() < 0.0
     for k in range(start, n):
         _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, cacc, bounded)
         if bounded:
-            _bound_members(ref, bnd, xacc, cacc, acc, margin)
+            _bound_members(ref, bnd, xacc, cacc, acc, margin, poles)
         kk = k & mask
         yk = y[k]
         for p in range(P):
