@@ -14,6 +14,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 import graybox as gb
+from graybox.core._records import RecordPrint, record_print
 from graybox.io import _json as _io
 
 STRUCT = gb.Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)y(k-2)", "u(k-1)^2", "1"])
@@ -33,6 +34,12 @@ def same(a, b, path="value"):
         a, b = np.asarray(a, float), np.asarray(b, float)
         assert a.shape == b.shape, path
         np.testing.assert_array_equal(bits(a), bits(b), err_msg=path)
+    elif isinstance(a, gb.Record) and isinstance(b, RecordPrint):  # a Pareto set's fitting record: saved as its print
+        same(record_print(a), b, path)
+    elif isinstance(a, RecordPrint):
+        assert type(b) is RecordPrint, path
+        for f in fields(a):
+            same(getattr(a, f.name), getattr(b, f.name), f"{path}.{f.name}")
     elif type(a) in _io._TYPES:
         assert type(a) is type(b), path
         for f in fields(a):

@@ -259,3 +259,33 @@ def test_a_damaged_print_field_is_named_once():
     with pytest.raises(gb.GrayboxFileError) as err:
         gb.from_json(json.dumps(doc))
     assert str(err.value).count("fitted_on[0]") == 1, str(err.value)
+
+
+def test_the_fitting_records_survive_replace_copy_pickle_and_json():
+    # dataclasses.replace(front, method=...) dropped the records the set was fitted on (a hidden attribute, no
+    # field), and decide_dsf then chose on a slice of the fitting record ('middle', ident[50:250]) with no word
+    import copy
+    import dataclasses
+    import pickle
+    data = _data2()
+    fresh = gb.pe_pareto(ST2, data, lambdas=np.logspace(-3, 0, 4))
+    piece = data.ident.slice(50, 250, "middle")
+    loaded = gb.from_json(gb.to_json(fresh))
+    kin = {"replace": dataclasses.replace(fresh, method="renamed"), "copy": copy.copy(fresh),
+           "deepcopy": copy.deepcopy(fresh), "pickle": pickle.loads(pickle.dumps(fresh)), "json": loaded,
+           "replace after json": dataclasses.replace(loaded, method="renamed"),
+           "json after replace": gb.from_json(gb.to_json(dataclasses.replace(fresh, units=("", "")))),
+           "pickle after json": pickle.loads(pickle.dumps(loaded))}
+    for how, ps in kin.items():
+        with pytest.raises(ValueError, match="choose_on.*fitting"):
+            gb.decide_dsf(ps, band=1.0, choose_on=piece)
+        assert gb.decide_dsf(ps, band=1.0, choose_on=data.valid).chosen_on == "valid", how
+    # a set built from its fields knows none unless told, and is told as a field
+    bare = ParetoSet(fresh.structure, fresh.thetas, fresh.lambdas, fresh.J1, fresh.JS, fresh.JSF, "PE")
+    assert bare.fitted_on == ()
+    assert gb.decide_dsf(bare, band=1.0, choose_on=piece).chosen_on == "middle"
+    told = dataclasses.replace(bare, fitted_on=(data.ident,))
+    with pytest.raises(ValueError, match="choose_on.*fitting"):
+        gb.decide_dsf(told, band=1.0, choose_on=piece)
+    with pytest.raises(TypeError, match="fitted_on"):
+        dataclasses.replace(bare, fitted_on=(data.ident.u,))

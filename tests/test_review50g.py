@@ -94,8 +94,7 @@ def test_a_damaged_print_is_named_once(field, value, said):
     rng = np.random.default_rng(0)
     rec = gb.Record(u=rng.standard_normal(300), y=rng.standard_normal(300), name="ident")
     ps = gb.ParetoSet(parse_structure(["y(k-1)", "u(k-1)"]), np.array([[0.5, 1.0], [0.4, 1.1]]), np.array([1.0, 0.5]),
-                      np.zeros(2), np.array([1.0, 2.0]), np.array([0.1, 0.05]), "PE")
-    ps._keep_fitted_on([rec])
+                      np.zeros(2), np.array([1.0, 2.0]), np.array([0.1, 0.05]), "PE", fitted_on=(rec,))
     doc = json.loads(gb.to_json(ps))
     doc["object"]["fitted_on"][0][field] = value
     with pytest.raises(gb.io.GrayboxFileError, match=said):

@@ -23,7 +23,7 @@ from ..models._evaluate import evaluate_thetas
 from ..models._coerce import as_record
 from ..models._model import Model
 from ._pareto import ParetoSet
-from ..core._records import (Record, check_overlap, check_print_overlap, choosing_records, require_lengths,
+from ..core._records import (Record, RecordPrint, check_overlap, check_print_overlap, choosing_records, require_lengths,
                              same_record)
 from ..core._reprs import beside, bound_text, squared_text
 from ..core._regressors import regressor_matrix
@@ -188,12 +188,13 @@ def choosing_js(pareto: ParetoSet, records: Record | Sequence[Record]) -> np.nda
     # its samples (the J_S check below sees only the set's mean over all of them)
     advice = "choose on data the fit did not see (e.g. data.valid)"
     for c in recs:
-        for f in getattr(pareto, "_fitted_on", ()):
+        for f in pareto.fitted_on:
+            if isinstance(f, RecordPrint):  # a set read from a file: its records' prints
+                check_print_overlap(c, f, "choosing", "fitting", advice, prefix="choose_on: ")
+                continue
             if same_record(c, f):
                 raise ValueError(f"choose_on: the choosing record {c.name!r} is a fitting record ({f.name!r}): {advice}")
             check_overlap(c, f, "choosing", "fitting", advice, prefix="choose_on: ")
-        for p in getattr(pareto, "_fitted_prints", ()):  # a set read from a file: its records' prints
-            check_print_overlap(c, p, "choosing", "fitting", advice, prefix="choose_on: ")
     th = np.where(np.isfinite(pareto.thetas), pareto.thetas, 0.0)
     L = pareto.structure.max_lag
     total = np.zeros(len(pareto))

@@ -18,7 +18,7 @@ from ..models._evaluate import evaluate_thetas
 from ..models._coerce import as_structure
 from ..models._model import Model, model_input_names
 from ..core._records import (Dataset, Record, RecordPrint, StaticPoints, as_records, carried_from, check_fitted_on,
-                             check_units, record_print)
+                             check_units)
 from ..core._validation import (Relocked, FrozenMap, check_bool, check_fields, check_int, check_mean_square, check_real,
                                 check_weight, float_array, frozen, real_array)
 from ..core._terms import Structure
@@ -113,6 +113,12 @@ class ParetoSet(Relocked):
     units : (str, str), optional
         The units of the input(s) and the output of those records (:meth:`from_thetas` takes the records');
         its members' models carry them, and choosing records in other units are refused. Empty: unknown.
+    fitted_on : tuple of Record or RecordPrint, optional
+        The records the set was fitted on (:meth:`from_thetas` and the estimators keep them), or, for a set read
+        from a file, their prints (names, lengths and hashes of blocks of samples, which :mod:`graybox.io` saves in
+        their stead): :func:`graybox.decide_dsf` refuses them, a copy or a slice of one as choosing records.
+        A field, so that ``dataclasses.replace``, copies, pickles and files keep it; not shown in the repr.
+        Empty (default): unknown, that check left to the set's own J_S.
     """
 
     structure: Structure
@@ -127,9 +133,14 @@ class ParetoSet(Relocked):
     input_names: tuple[str, ...] | None = None
     Ts: float | None = None
     units: tuple[str, str] = ("", "")
+    fitted_on: tuple[Record | RecordPrint, ...] = ()
 
     def __post_init__(self) -> None:
         check_fields(self)
+        bad = [r for r in self.fitted_on if not isinstance(r, (Record, RecordPrint))]
+        if bad:
+            raise TypeError("ParetoSet: fitted_on must hold the Records the set was fitted on (or their prints), got "
+                            f"a {type(bad[0]).__name__}")
         if self.Ts is not None:
             object.__setattr__(self, "Ts", check_real(self.Ts, "Ts (seconds)", low=0, low_open=True))
         object.__setattr__(self, "units", check_units(self.units, "ParetoSet"))
@@ -235,24 +246,8 @@ class ParetoSet(Relocked):
         jsf = np.full(K, np.nan) if static is None else evaluate_thetas(structure, run, None, run_static)["JSF"]
         lam = np.full(K, np.nan) if lambdas is None else np.asarray(lambdas, float)
         th[bad] = np.nan
-        out = cls(structure, th, lam, j1 / total, js / total, jsf, method, extra or {}, fails,
-                  **carried_from(recs, static))
-        out._keep_fitted_on(recs)
-        return out
-
-    def _keep_fitted_on(self, records: Sequence[Record], prints: Sequence[RecordPrint] = ()) -> None:
-        """Keep the records the set was fitted on (no field: not compared or shown), that
-        :func:`graybox.decide_dsf` refuses them, a piece of one or one of several as choosing records; or,
-        for a set read from a file, their prints (:class:`~graybox.core._records.RecordPrint`, which
-        :mod:`graybox.io` saves), that it refuses the same."""
-        object.__setattr__(self, "_fitted_on", tuple(records))
-        object.__setattr__(self, "_fitted_prints", tuple(prints))
-
-    def _prints(self) -> tuple[RecordPrint, ...]:
-        """The prints of the records the set was fitted on: computed from them, or as read from a file (empty:
-        neither, e.g. a set built from its fields or read from a file written before prints were kept)."""
-        recs = getattr(self, "_fitted_on", ())
-        return tuple(record_print(r) for r in recs) if recs else getattr(self, "_fitted_prints", ())
+        return cls(structure, th, lam, j1 / total, js / total, jsf, method, extra or {}, fails,
+                   **carried_from(recs, static), fitted_on=tuple(recs))
 
     def check_record(self, record: Record) -> None:
         """``ValueError`` when ``record`` (or static points) was sampled at another period than the set was fitted
@@ -310,11 +305,9 @@ class ParetoSet(Relocked):
             raise ValueError(f"member index {bad[0]} out of range for a set of {K}")
         idx = idx % max(K, 1)  # a failed member named from the end, or twice, keeps its failure
         fails = {new: self.failures[old] for new, old in enumerate(idx.tolist()) if old in self.failures}
-        out = ParetoSet(self.structure, self.thetas[idx], self.lambdas[idx], self.J1[idx], self.JS[idx],
-                        self.JSF[idx], self.method, {k: v[idx] for k, v in self.extra.items()}, fails,
-                        self.input_names, self.Ts, self.units)
-        out._keep_fitted_on(getattr(self, "_fitted_on", ()), getattr(self, "_fitted_prints", ()))
-        return out
+        return ParetoSet(self.structure, self.thetas[idx], self.lambdas[idx], self.J1[idx], self.JS[idx],
+                         self.JSF[idx], self.method, {k: v[idx] for k, v in self.extra.items()}, fails,
+                         self.input_names, self.Ts, self.units, self.fitted_on)
 
     def nondominated(self, objectives: Sequence[str] = ("JS", "JSF")) -> "ParetoSet":
         """The members that no other member dominates in ``objectives`` (order kept)."""

@@ -48,7 +48,7 @@ than the one expected, a missing or unknown field, a value of the wrong kind; th
 constructor then validates shapes and meaning (e.g. θ's length against the structure). The units
 (of u and y) are written when given and read back with :func:`read_header`.
 
-A :class:`~graybox.ParetoSet` also carries ``fitted_on``: a print of each record it was fitted on (its name, length,
+A :class:`~graybox.ParetoSet`'s ``fitted_on`` is saved as a print of each record it was fitted on (its name, length,
 input names and hashes of its samples in blocks of 16, or of N / 4096 for longer records: not the samples), so that
 the set read back refuses those records, copies and slices of them (at least two blocks long) as choosing records (:func:`graybox.decide_dsf`'s ``choose_on``) as the set
 did when it was made; a file written without it loads, with that check left to the set's own J_S.
@@ -81,7 +81,7 @@ from ..estimation._epsilon_constraint import DSFResult
 from ..estimation._output_error import OEResult
 from ..selection._forward_regression import Selection
 from ..selection._simulation_error_pruning import SEMPResult
-from ..core._records import Dataset, Record, RecordPrint, StaticPoints, check_units
+from ..core._records import Dataset, Record, RecordPrint, StaticPoints, check_units, record_print
 from ..core._files import bom_encoding, write_atomically
 from ..core._validation import MAX_NESTING, FrozenMap, check_path, locked
 from ..core._version import graybox_version
@@ -236,6 +236,8 @@ def _enc(kind: str, v: Any, where: str = "") -> Any:
         return {str(k): _arr(a) for k, a in dict(v).items()}
     if kind == "failures":
         return {str(k): str(r) for k, r in dict(v).items()}
+    if kind == "prints":  # a ParetoSet's fitting records: their prints, never their samples
+        return [_enc_print(record_print(r) if isinstance(r, Record) else r) for r in v]
     if kind == "skipped":
         return [[str(t), str(why)] for t, why in v]
     if kind == "frame":
@@ -312,6 +314,8 @@ def _dec(kind: str, v: Any, where: str, rd: _Reader) -> Any:
         return tuple(rd.array(a, f"{where}[{i}]", 1) for i, a in enumerate(rd.list(v, where)))
     if kind == "dict_arrays":
         return {k: rd.array(a, f"{where}.{k}", 1) for k, a in rd.dict(v, where).items()}
+    if kind == "prints":
+        return tuple(_dec_print(x, f"{where}[{i}]", rd) for i, x in enumerate(rd.list(v, where)))
     if kind == "failures":
         out = {}
         for k, r in rd.dict(v, where).items():
@@ -617,7 +621,7 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
     "ParetoSet": (ParetoSet, (("method", "str"), ("structure", "structure"), ("lambdas", "array1"),
                               ("thetas", "array2"), ("J1", "array1"), ("JS", "array1"), ("JSF", "array1"),
                               ("extra", "dict_arrays"), ("failures", "failures"), ("input_names", "names"),
-                              ("Ts", "float_or_none"), ("units", "names"))),
+                              ("Ts", "float_or_none"), ("units", "names"), ("fitted_on", "prints"))),
     "Selection": (Selection, (("structure", "structure"), ("err", "array1"), ("theta", "array1"),
                               ("noise", "structure"), ("evaluated", "structure"), ("err_evaluated", "array1"),
                               ("rss", "array1"), ("criterion", "str"), ("criterion_curve", "array1"), ("stop", "str"),
@@ -738,7 +742,7 @@ _STATIC = ("StaticPoints", "StaticCurve", "StaticSurface")
 _KINDS = frozenset({"float", "array1", "array2", "inputs", "int", "seed", "str", "bool", "floats", "pairs", "exponents",
                     "structure", "structures", "names", "arrays", "dict_arrays", "failures", "skipped", "frame",
                     "static", "local_models", "ints", "int_array1", "bool_array1", "texts", "band",
-                    "correlation_tests", "plain_map", "float_or_floats"})
+                    "correlation_tests", "plain_map", "float_or_floats", "prints"})
 _KINDS = _KINDS | {k + _OR_NONE for k in _KINDS}
 
 #: Fields written for the reader only (ignored on load), per type: their names and how to write them.
@@ -763,7 +767,9 @@ _ADDED: dict[str, dict[str, Any]] = {"ELSResult": {"n_direct": 0}, "Decision": {
                                      # and the units of the records fitted on, carried since 2026-11-27: none said ("", "")
                                      "Model": {"input_names": _DEFAULT, "Ts": None, "units": _DEFAULT},
                                      "NeuralModel": {"input_names": _DEFAULT, "Ts": None, "units": _DEFAULT},
-                                     "ParetoSet": {"input_names": _DEFAULT, "Ts": None, "units": _DEFAULT},
+                                     # and the prints of its fitting records: none known
+                                     "ParetoSet": {"input_names": _DEFAULT, "Ts": None, "units": _DEFAULT,
+                                                   "fitted_on": _DEFAULT},
                                      "Selection": {k: _DEFAULT for k in ("search", "subsets", "subset_rss",
                                                                          "input_names", "units")} | {"Ts": None},
                                      "SEMPResult": {"input_names": _DEFAULT, "Ts": None, "units": _DEFAULT},
@@ -811,16 +817,6 @@ def _dec_print(v: Any, where: str, rd: _Reader) -> RecordPrint:
         raise rd.fail(where, str(exc)) from None
 
 
-#: Values a type keeps that are no constructor field, saved and read back (absent in older files: none kept):
-#: per type, the field's name, how to write it from the value, and how to give it to the value read.
-#: A ParetoSet's fitting records' prints, that the set read refuses them as choosing records (decide_dsf).
-_KEPT: dict[str, tuple[str, Callable[[Any], Any], Callable[[Any, Any, str, "_Reader"], None]]] = {
-    "ParetoSet": ("fitted_on", lambda ps: [_enc_print(p) for p in ps._prints()],
-                  lambda ps, v, where, rd: ps._keep_fitted_on((), tuple(_dec_print(x, f"{where}[{i}]", rd)
-                                                                        for i, x in enumerate(rd.list(v, where))))),
-}
-
-
 def _saved_name(obj: Any, where: str) -> str:
     """The saved type's name of ``obj``, held in the field ``where``; ``ValueError`` for a value of another type (a
     subclass of a saved type: a file holds graybox's own types, and would read it back without the subclass)."""
@@ -838,9 +834,6 @@ def _encode_fields(obj: Any, where: str = "") -> dict:
     out = {k: _enc(kind, getattr(obj, k), f"{name}.{k}") for k, kind in _CODECS[name][1]}
     if name in _READABLE:
         out.update(_READABLE[name][1](obj))
-    if name in _KEPT:
-        field_name, write, _ = _KEPT[name]
-        out[field_name] = write(obj)
     return out
 
 
@@ -851,7 +844,6 @@ def _decode_fields(name: str, v: Any, where: str, rd: _Reader) -> Any:
         if old in d and new not in d:
             d = {**{k: x for k, x in d.items() if k != old}, new: read(d[old])}
     d = {k: x for k, x in d.items() if k not in _DROPPED.get(name, frozenset())}
-    kept = d.pop(_KEPT[name][0], None) if name in _KEPT else None
     known = {k for k, _ in spec} | set(_READABLE[name][0] if name in _READABLE else ())
     unknown = sorted(set(d) - known)
     if unknown:
@@ -866,8 +858,6 @@ def _decode_fields(name: str, v: Any, where: str, rd: _Reader) -> Any:
         obj = cls(**kwargs)
     except (ValueError, TypeError) as exc:
         raise rd.fail(where, f"not a valid {name}: {exc}") from None
-    if kept is not None:
-        _KEPT[name][2](obj, kept, f"{where}.{_KEPT[name][0]}", rd)
     return obj
 
 
