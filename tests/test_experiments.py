@@ -727,3 +727,27 @@ def test_a_store_that_is_no_path_is_refused_naming_the_argument(call, arg, said,
     fn = getattr(gx, call)
     with pytest.raises(TypeError, match=said):
         fn(arg, tmp_path / "out") if call == "write_report" else fn(arg)
+
+
+def test_models_equal_to_round_off_share_a_rank(small_store):
+    # the same model fitted twice (least squares and a CLS whose constraint is not active, two solvers) scores J_S
+    # valid 1e-12 apart: the leaderboard ranked them 1, 2, 3 by round-off. They share a rank, listed by fewer
+    # parameters then in the grid's order; the next rank counts the models before it
+    path, _ = small_store
+    df = gx.load_results(path)
+    df = df[(df.status == "ok") | (df.variant == "NN")].copy()
+    df["status"] = "ok"
+    js = {("first-order", "LS"): 2.0 + 2e-12, ("first-order", "CLS"): 2.0, ("first-order", "PE band"): 2.0 - 1e-12,
+          ("first-order", "PE"): 2.0 * (1 + 1e-6), ("first-order", "NN"): 1.0, ("made", "LS"): 2.0 + 1e-12,
+          ("made", "CLS"): 3.0, ("made", "PE band"): 3.0 + 3e-12, ("made", "PE"): 4.0, ("made", "NN"): np.inf}
+    df["JS_valid"] = [js[(s, v)] for s, v in zip(df.structure, df.variant)]
+    lb = gx.leaderboard(df, rule="chosen")
+    n_params = lb["n_params"].to_dict()
+    got = [(s, v, r) for (_, s, v), r in lb["rank"].items()]
+    # 1.0 alone first; the four at 2.0 to round-off share rank 2, the made LS (6 parameters) after the three
+    # first-order ones (4), which keep the grid's order; 2.000002 is another result
+    assert n_params[("pumping", "made", "LS")] > n_params[("pumping", "first-order", "LS")]
+    assert got[:8] == [("first-order", "NN", 1), ("first-order", "LS", 2), ("first-order", "CLS", 2),
+                       ("first-order", "PE band", 2), ("made", "LS", 2), ("first-order", "PE", 6),
+                       ("made", "CLS", 7), ("made", "PE band", 7)]
+    assert got[8][:2] == ("made", "PE") and got[8][2] == 9 and np.isnan(got[9][2])

@@ -44,6 +44,10 @@ __all__ = ["RULES", "GridStatus", "grid_status", "leaderboard", "heatmap_table",
 #: Ranking rules of :func:`leaderboard`.
 RULES = ("dsf_valid", "chosen")
 _KEYS = ["data", "structure", "variant"]
+#: Validation J_S values this close (relative to the smaller) are one result: the same model fitted twice (least
+#: squares and an unconstrained CLS, two solvers) scores J_S apart by round-off (1e-12 relative), no difference of
+#: the models; the leaderboard gives them one rank.
+_JS_TIE_RTOL = 1e-8
 _MARKERS = ("o", "s", "^", "v", "D", "P", "X", "*", "<", ">", "h", "p")
 
 
@@ -278,8 +282,10 @@ def leaderboard(
     Returns
     -------
     pandas.DataFrame
-        Index (data, structure, variant); columns ``rank`` (1 = best within the data set, by
-        J_S valid), ``JS_valid``, ``JS_ident``, ``JSF``, ``fit_valid``, ``n_params``, ``seed``,
+        Index (data, structure, variant), sorted by data set and rank; columns ``rank`` (1 = best within the data
+        set, by J_S valid; models whose J_S valid agree to a relative 1e-8, such as the same
+        model fitted twice, share a rank, listed the fewer parameters first, then in the grid's order; the
+        next rank counts the models before it: 1, 1, 3), ``JS_valid``, ``JS_ident``, ``JSF``, ``fit_valid``, ``n_params``, ``seed``,
         ``lambda1`` (of the member, NaN for single models), ``in_band`` (nullable boolean: True or False as
         the band decided, <NA> where none did: under ``"chosen"`` a model whose cell decided no band, such as
         least squares, and a group with no finished model), ``band`` (the B it was judged against under
@@ -358,10 +364,28 @@ def leaderboard(
     out["in_band"] = pd.array(out["in_band"], dtype="boolean")  # True, False or <NA> (not known): never NaN
     out["n_params"] = pd.array(out["n_params"], dtype="Int64")
     out["seed"] = pd.array(out["seed"], dtype="Int64")
-    out["rank"] = out.groupby("data")["JS_valid"].rank(method="min")
+    out["rank"] = _tied_ranks(out["data"].to_numpy(), out["JS_valid"].to_numpy(float))
     cols = ["rank", "JS_valid", "JS_ident", "JSF", "fit_valid", "n_params", "seed", "lambda1", "in_band", "band",
             "candidates", "cells", "ok", "reason"]
-    return out.set_index(_KEYS)[cols].sort_values(["data", "rank"], kind="stable", na_position="last")
+    # within a shared rank the fewer parameters first, then the grid's order (not J_SF: the same model fitted
+    # twice has J_SF apart by round-off too)
+    return out.set_index(_KEYS)[cols].sort_values(["data", "rank", "n_params"], kind="stable", na_position="last")
+
+
+def _tied_ranks(data: np.ndarray, js: np.ndarray) -> np.ndarray:
+    """Each row's rank within its data set by ``js`` (1: the smallest; NaN for NaN): a row within
+    ``_JS_TIE_RTOL`` of the first of a run of rows (in ascending order) shares that row's rank, and the next
+    rank counts the rows before it (1, 1, 3)."""
+    rank = np.full(len(js), np.nan)
+    for d in pd.unique(data):
+        idx = np.flatnonzero((data == d) & ~np.isnan(js))
+        idx = idx[np.argsort(js[idx], kind="stable")]
+        first = None
+        for pos, i in enumerate(idx):
+            if first is None or js[i] > js[first] + _JS_TIE_RTOL * abs(js[first]):
+                first, r = i, pos + 1
+            rank[i] = r
+    return rank
 
 
 def heatmap_table(
