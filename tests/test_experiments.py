@@ -751,3 +751,21 @@ def test_models_equal_to_round_off_share_a_rank(small_store):
                        ("first-order", "PE band", 2), ("made", "LS", 2), ("first-order", "PE", 6),
                        ("made", "CLS", 7), ("made", "PE band", 7)]
     assert got[8][:2] == ("made", "PE") and got[8][2] == 9 and np.isnan(got[9][2])
+
+
+def test_compare_results_labels_keep_the_stores_variants_apart(small_store, tmp_path):
+    # labels "x" and "x: PE" made store one's "PE band" and a store two variant "band" both 'x: PE band', one group
+    # of the leaderboard with both stores' cells: a label holding the separator ': ' is refused
+    import shutil
+    path, _ = small_store
+    other = tmp_path / "other.sqlite"
+    shutil.copy(path, other)
+    with pytest.raises(ValueError, match="labels must not hold ': '.*'x: PE'"):
+        gx.compare_results([path, other], labels=["x", "x: PE"])
+    named = tmp_path / "run: 2.sqlite"
+    shutil.copy(path, named)
+    with pytest.raises(ValueError, match="'run: 2'.*give labels="):
+        gx.compare_results([path, named])
+    df = gx.compare_results([path, named], labels=["x", "x:PE"])
+    lb = gx.leaderboard(df)
+    assert len(lb) == 2 * len(gx.leaderboard(path)) and set(df["store"]) == {"x", "x:PE"}
