@@ -769,3 +769,21 @@ def test_compare_results_labels_keep_the_stores_variants_apart(small_store, tmp_
     df = gx.compare_results([path, named], labels=["x", "x:PE"])
     lb = gx.leaderboard(df)
     assert len(lb) == 2 * len(gx.leaderboard(path)) and set(df["store"]) == {"x", "x:PE"}
+
+
+def test_a_no_band_rules_in_band_written_by_an_older_graybox_reads_missing(small_store, tmp_path):
+    # before 7937b3f8 a min-J_SF or min-correlation cell stored in_band = 1 whatever its J_SF; its key is unchanged,
+    # so a store of then is never rerun, and load_results said in_band True beside J_SF far outside the band
+    import shutil
+    path, _ = small_store
+    old = tmp_path / "old.sqlite"
+    shutil.copy(path, old)
+    with sqlite3.connect(old) as con:
+        n = con.execute("UPDATE cells SET in_band = 1 WHERE variant = 'PE' AND rule = 'min J_SF'").rowcount
+    con.close()
+    assert n == 2  # one cell per structure: a deterministic estimator runs one seed
+    now, then = gx.load_results(path), gx.load_results(old)
+    pe = (then["variant"] == "PE").to_numpy()
+    assert then.loc[pe, "in_band"].isna().all()
+    pd.testing.assert_series_equal(then["in_band"], now["in_band"])  # the D_SF cells' True / False as written
+    assert gx.leaderboard(old, rule="chosen").xs("PE", level="variant")["in_band"].isna().all()

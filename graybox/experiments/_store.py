@@ -1088,6 +1088,11 @@ def running_cells(path: str | os.PathLike) -> dict[str, int]:
     return out
 
 
+#: The rules whose cells read no band: their rows hold in_band NULL. Rows written before 7937b3f8 hold 1 for them
+#: (D_SF's own "min J_SF", its fallback, holds 0), which load_results reads as NULL, not as "in the band".
+_NO_BAND_RULES = frozenset({"min J_SF", "min correlation"})
+
+
 def load_results(path: str | os.PathLike, *, spec: str | int = "latest") -> pd.DataFrame:
     """The cells of a grid store as a DataFrame, one row per cell, in grid order.
 
@@ -1110,7 +1115,8 @@ def load_results(path: str | os.PathLike, *, spec: str | int = "latest") -> pd.D
         the chosen model's ``terms`` (tuple of str), ``theta`` (ndarray, engineering units; None
         for neural models), ``n_params`` (N_p: the structure's number of terms once it is made, whatever
         the cell's status; a network's parameters once it is fitted), ``lambda1``, ``rule`` and ``in_band`` of the
-        decision (``in_band`` missing where the rule reads no band: min J_SF, min correlation), ``band`` (the data
+        decision (``in_band`` missing where the rule reads no band: min J_SF, min correlation; also in rows an
+        older graybox wrote with in_band 1 for them), ``band`` (the data
         set's J_SF band; with "all", the largest of the specs holding the cell: a cell that reads no band is one
         result under each); the shared evaluator's figures on both
         records ``J1_ident``, ``JS_ident``, ``fit_ident``, ``J1_valid``, ``JS_valid``,
@@ -1151,6 +1157,8 @@ def load_results(path: str | os.PathLike, *, spec: str | int = "latest") -> pd.D
             if r["in_band"] is not None and (isinstance(r["in_band"], bool) or r["in_band"] not in (0, 1)):
                 raise ValueError(f"in_band {r['in_band']!r}, not 0 or 1")
             r["in_band"] = None if r["in_band"] is None else bool(r["in_band"])
+            if r["in_band"] and r["rule"] in _NO_BAND_RULES:
+                r["in_band"] = None  # written before 7937b3f8 (the cell's key unchanged, never rerun): no band read
             for c in ("seed", "n_params"):
                 if r[c] is not None and (isinstance(r[c], bool) or not isinstance(r[c], int)):
                     raise ValueError(f"{c} {r[c]!r}, not an integer")
