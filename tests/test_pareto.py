@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from hypothesis.extra.numpy import arrays
 
-from graybox import Record, reference
+from graybox import Record, Structure, reference
 from graybox.models._evaluate import evaluate_thetas, j1, js, jsf
 from graybox.estimation._pareto import ParetoSet, nondominated_mask
 
@@ -176,3 +176,20 @@ def test_plot_pareto(pset):
         plot_pareto(pset, {"ELS": 3.0})
     with pytest.raises(ValueError, match="JS_ident"):
         plot_pareto(pset, pd.DataFrame({"a": [1]}))
+
+
+def test_nondominated_refuses_an_objective_no_member_has():
+    # a set evaluated without static points has J_SF NaN for every member; nondominated() (J_S, J_SF) dropped every
+    # one (a row with a NaN is never kept) and returned an empty set without a word
+    rng = np.random.default_rng(0)
+    u = rng.uniform(-1, 1, 200)
+    y = np.zeros(200)
+    for k in range(1, 200):
+        y[k] = 0.5 * y[k - 1] + u[k - 1]
+    st_ = Structure(["y(k-1)", "u(k-1)"])
+    ps = ParetoSet.from_thetas(st_, [[0.5, 1.0], [0.4, 1.1], [0.6, 0.8]], [1.0, 0.5, 0.1], Record(u, y), None)
+    assert np.isnan(ps.JSF).all()
+    with pytest.raises(ValueError, match="no member of the set has a JSF.*without static points"):
+        ps.nondominated()
+    front = ps.nondominated(("J1", "JS"))  # the exact member dominates the others in both
+    assert len(front) == 1 and front.thetas[0].tolist() == [0.5, 1.0]

@@ -310,7 +310,10 @@ class ParetoSet(Relocked):
                          self.input_names, self.Ts, self.units, self.fitted_on)
 
     def nondominated(self, objectives: Sequence[str] = ("JS", "JSF")) -> "ParetoSet":
-        """The members that no other member dominates in ``objectives`` (order kept)."""
+        """The members that no other member dominates in ``objectives`` (order kept).
+
+        A member with a NaN objective is not kept; an objective that no member has (J_SF of a set evaluated
+        without static points) is refused with ``ValueError``, not answered with an empty set."""
         if isinstance(objectives, str) or not hasattr(objectives, "__len__"):
             raise TypeError(f"objectives must be a sequence of objective names, got {objectives!r}")
         if len(objectives) < 1:
@@ -319,8 +322,16 @@ class ParetoSet(Relocked):
             pts = np.column_stack([self.objective(o) for o in objectives])
         except ValueError as exc:
             raise ValueError(f"objectives: {exc}") from None
+        ok = np.ones(len(self), bool)
+        ok[list(self.failures)] = False
+        unknown = [o for o, col in zip(objectives, pts.T) if ok.any() and np.isnan(col[ok]).all()]
+        if unknown:  # every member would be dropped (a row with a NaN is never kept): an empty front, said nowhere
+            raise ValueError(f"objectives: no member of the set has a {unknown[0]} (NaN"
+                             + (": the set was evaluated without static points); evaluate it at static points "
+                                "(ParetoSet.from_thetas(..., static=points)) or" if unknown[0] == "JSF" else ");")
+                             + f" filter by other objectives (this set has {list(OBJECTIVES) + list(self.extra)})")
         keep = nondominated_mask(pts)
-        keep[list(self.failures)] = False
+        keep[~ok] = False
         return self.subset(keep)
 
     def to_frame(self, params: bool = False) -> pd.DataFrame:
