@@ -787,3 +787,23 @@ def test_a_no_band_rules_in_band_written_by_an_older_graybox_reads_missing(small
     assert then.loc[pe, "in_band"].isna().all()
     pd.testing.assert_series_equal(then["in_band"], now["in_band"])  # the D_SF cells' True / False as written
     assert gx.leaderboard(old, rule="chosen").xs("PE", level="variant")["in_band"].isna().all()
+
+
+def test_all_specs_name_each_meaning_once(tmp_path):
+    # spec 1's least squares named "PE (spec 2)" and spec 2's PE, another variant than spec 1's "PE", read with
+    # spec="all" as "PE (spec 2)" too: the leaderboard held an LS model and a PE front in one group
+    path = tmp_path / "s.sqlite"
+
+    def grid(variants):
+        return gx.Grid(name="g", data=[gx.DataSpec("pumping", bundled="pumping", band=1.0)],
+                       structures=[gx.StructureSpec("fo", terms=["y(k-1)", "u(k-1)", "1"])], variants=variants)
+
+    pe = {"estimator": "pe", "options": {"solver": "closed"}, "decision": gx.DecisionRule("min_jsf")}
+    gx.run_grid(grid([gx.Variant("PE", lambdas=[1.0], **pe), gx.Variant("PE (spec 2)", "ls")]), path)
+    gx.run_grid(grid([gx.Variant("PE", lambdas=[0.5], **pe)]), path)
+    df = gx.load_results(path, spec="all")
+    assert len(df) == 3 and df["variant"].is_unique, df["variant"].tolist()
+    assert df.set_index("estimator")["variant"]["ls"] == "PE (spec 2)"  # a name that has one meaning stays itself
+    assert df.loc[df["lambda1"] == 1.0, "variant"].item() == "PE (spec 1)"
+    assert df.loc[df["lambda1"] == 0.5, "variant"].item().startswith("PE (spec 2, variant ")
+    assert (gx.leaderboard(df)["cells"] == 1).all()

@@ -986,9 +986,26 @@ def _all_rows(conn: sqlite3.Connection, cols: str, bands: Mapping[int, Mapping[s
         meanings.setdefault(("structure", s), {}).setdefault(sh, spec)
         meanings.setdefault(("variant", v), {}).setdefault(vh, spec)
 
+    # a name of two meanings is shown with the spec that defined each, e.g. "PE (spec 2)"; where that is a name
+    # some spec gives another structure or variant (or another label), with the content's hash too: one label, one
+    # meaning (else the leaderboard held both in one group)
+    labels: dict[tuple[str, str, str], str] = {}
+    for kind in ("structure", "variant"):
+        used = {n for (k, n), m in meanings.items() if k == kind and len(m) == 1}
+        for (k, n), m in meanings.items():
+            if k != kind or len(m) == 1:
+                continue
+            for h, first_spec in m.items():
+                lab = f"{n} (spec {first_spec})"
+                if lab in used:
+                    lab = f"{n} (spec {first_spec}, {kind} {h[:12]})"
+                while lab in used:
+                    lab += "'"
+                used.add(lab)
+                labels[(kind, n, h)] = lab
+
     def label(kind: str, name: str, h: str) -> str:
-        m = meanings[(kind, name)]
-        return name if len(m) == 1 else f"{name} (spec {m[h]})"
+        return labels.get((kind, name, h), name)
 
     rows = []
     for r in conn.execute(f"SELECT {cols} FROM cells c").fetchall():
@@ -1104,7 +1121,8 @@ def load_results(path: str | os.PathLike, *, spec: str | int = "latest") -> pd.D
         Which cells: those of the spec run last (default), every cell the store holds, or those
         of spec number ``spec`` (:func:`store_specs` lists them). With "all", a structure or
         variant name that stood for different contents in different specs is followed by the
-        spec that defined it, e.g. ``"PE (spec 2)"``.
+        spec that defined it, e.g. ``"PE (spec 2)"`` (and by its content's hash where a spec gives that name to
+        another variant: no two meanings share a name).
 
     Returns
     -------
