@@ -807,3 +807,21 @@ def test_all_specs_name_each_meaning_once(tmp_path):
     assert df.loc[df["lambda1"] == 1.0, "variant"].item() == "PE (spec 1)"
     assert df.loc[df["lambda1"] == 0.5, "variant"].item().startswith("PE (spec 2, variant ")
     assert (gx.leaderboard(df)["cells"] == 1).all()
+
+
+def test_compare_results_tells_apart_structures_two_stores_define_differently(small_store, tmp_path):
+    # store two's "first-order" has other terms than the small store's: compare_results showed both as one
+    # structure, one heat-map row and one leaderboard structure for two models of different terms
+    path, _ = small_store
+    other = tmp_path / "other.sqlite"
+    gx.run_grid(gx.Grid(name="o", data=[gx.DataSpec("pumping", bundled="pumping")],
+                        structures=[gx.StructureSpec("first-order", terms=["y(k-1)", "u(k-1)", "1"]),
+                                    gx.StructureSpec("made", candidates={"ny": 2, "nu": 2, "degree": 2,
+                                                                         "max_y_power": 1}, n_terms=6, include=["1"])],
+                        variants=[gx.Variant("LS", "ls")]), other)
+    df = gx.compare_results([path, other], labels=["s", "o"])
+    got = {(st, v): tuple(t) for st, v, t in zip(df["structure"], df["variant"], df["terms"]) if v.endswith(": LS")}
+    assert got[("first-order (o)", "o: LS")] == ("y(k-1)", "u(k-1)", "1")
+    assert len(got[("first-order (s)", "s: LS")]) == 4
+    assert got[("made", "o: LS")] == got[("made", "s: LS")]  # one meaning in both stores: one name
+    assert set(gx.heatmap_table(df).index) == {"first-order (s)", "first-order (o)", "made"}

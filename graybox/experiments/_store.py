@@ -1225,6 +1225,44 @@ def _same_data_text(paths: Sequence[Path], frames: Sequence[pd.DataFrame]) -> st
             + ". Rename the data set in one spec to compare them")
 
 
+def _structure_contents(df: pd.DataFrame) -> dict[str, set[str]]:
+    """Each structure name of a store's results and the contents (canonical JSON) its specs give it: the spec
+    read, or every spec of the store for ``spec="all"``."""
+    sel = df.attrs.get("selection")
+    out: dict[str, set[str]] = {}
+    for info in df.attrs.get("specs", ()):
+        if sel != "all" and info.get("id") != sel:
+            continue
+        for st in info.get("spec", {}).get("structures", ()):
+            if isinstance(st, Mapping) and isinstance(st.get("name"), str):
+                body = json.dumps({k: v for k, v in st.items() if k != "name"}, sort_keys=True)
+                out.setdefault(st["name"], set()).add(body)
+    return out
+
+
+def _told_apart_structures(labels: Sequence[str], frames: Sequence[pd.DataFrame]) -> list[dict[str, str]]:
+    """Per store, its structure names that another store gives other terms or candidates, each followed by the
+    store's label (``"made (a)"``): the heat map's rows and the leaderboard's index then never show two structures
+    as one."""
+    contents = [_structure_contents(df) for df in frames]
+    shown = [set(df["structure"]) for df in frames]
+    used = set().union(*shown)
+    out: list[dict[str, str]] = [{} for _ in frames]
+    for name in sorted(set().union(*shown)):
+        holders = [i for i, names in enumerate(shown) if name in names]
+        if len(holders) < 2 or any(name not in contents[i] for i in holders):
+            continue  # in one store only, or a label of load_results' own ("PE (spec 2)"): as it is
+        if len(set().union(*(contents[i][name] for i in holders))) == 1:
+            continue  # one meaning in every store
+        for i in holders:
+            new = f"{name} ({labels[i]})"
+            while new in used:
+                new += "'"
+            used.add(new)
+            out[i][name] = new
+    return out
+
+
 def compare_results(
     stores: Sequence[str | os.PathLike],
     *,
@@ -1250,7 +1288,8 @@ def compare_results(
     Returns
     -------
     pandas.DataFrame
-        :func:`load_results`' columns and ``store`` (the label); variants read ``"label: name"``.
+        :func:`load_results`' columns and ``store`` (the label); variants read ``"label: name"``; a structure
+        name that two stores give different terms or candidates reads ``"name (label)"`` in each.
 
     Raises
     ------
@@ -1299,9 +1338,11 @@ def compare_results(
         raise StoreError("the stores share no data set ("
                          + "; ".join(f"{p}: {sorted(n)}" for p, n in zip(paths, names))
                          + "): there is nothing to compare side by side" + _same_data_text(paths, frames))
+    renamed = _told_apart_structures(labels, frames)
     out = []
-    for lab, df in zip(labels, frames):
+    for lab, df, names in zip(labels, frames, renamed):
         d = df.copy()
+        d["structure"] = [names.get(s, s) for s in d["structure"]]
         d["variant"] = [f"{lab}: {v}" for v in d["variant"]]
         d.insert(0, "store", lab)
         out.append(d)
