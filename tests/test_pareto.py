@@ -193,3 +193,17 @@ def test_nondominated_refuses_an_objective_no_member_has():
         ps.nondominated()
     front = ps.nondominated(("J1", "JS"))  # the exact member dominates the others in both
     assert len(front) == 1 and front.thetas[0].tolist() == [0.5, 1.0]
+
+
+@pytest.mark.parametrize("name", ["JS", "J1", "JSF", "lambda1", "failure"])
+def test_extra_values_cannot_take_the_name_of_the_sets_own(name):
+    # extra={"JS": …} was kept: to_frame() wrote it over the set's J_S column (9.0 where J_S was 1.0) while
+    # objective("JS") gave the set's own
+    st_ = Structure(["y(k-1)", "u(k-1)"])
+    args = (st_, [[0.5, 1.0], [0.4, 1.1]], [1.0, 0.5], [0.1, 0.2], [1.0, 2.0], [3.0, 4.0], "x")
+    with pytest.raises(ValueError, match=f"extra: '{name}' names a value the set holds itself"):
+        ParetoSet(*args, {name: [9.0, 9.0]})
+    with pytest.raises(TypeError, match="extra: a per-member value is named by a str"):
+        ParetoSet(*args, {1: [9.0, 9.0]})
+    frame = ParetoSet(*args, {"js": [9.0, 9.0]}).to_frame()
+    assert frame["JS"].tolist() == [1.0, 2.0] and frame["js"].tolist() == [9.0, 9.0]

@@ -28,6 +28,8 @@ __all__ = ["ParetoSet", "nondominated_mask", "OBJECTIVES"]
 
 #: Objective names a ParetoSet carries (minimised).
 OBJECTIVES = ("J1", "JS", "JSF")
+#: The columns of :meth:`ParetoSet.to_frame` that are the set's own: no key of ``extra``.
+_OWN_COLUMNS = ("lambda1", *OBJECTIVES, "failure")
 
 
 def nondominated_mask(points: np.ndarray) -> np.ndarray:
@@ -98,7 +100,8 @@ class ParetoSet(Relocked):
     method : str
         How the set was produced (e.g. ``"PE (clarabel, mse)"``).
     extra : mapping str -> ndarray, shape (K,)
-        Further per-member values (e.g. ``"JSF_QR"``, the affine static error PE trades).
+        Further per-member values (e.g. ``"JSF_QR"``, the affine static error PE trades), by names other than
+        the set's own columns ``"lambda1"``, ``"J1"``, ``"JS"``, ``"JSF"`` and ``"failure"``.
     failures : mapping int -> str
         Members whose estimate failed (e.g. no start of an SE fit was feasible at that λ), with
         the reason in words. Such a member stays in the set so that a sweep reports every λ: its
@@ -176,6 +179,11 @@ class ParetoSet(Relocked):
             object.__setattr__(self, nm, v)
         ex = {}
         for k, v in dict(self.extra).items():
+            if not isinstance(k, str):  # a file writes the name as text: 1 would read back as '1'
+                raise TypeError(f"extra: a per-member value is named by a str, got {k!r} ({type(k).__name__})")
+            if k in _OWN_COLUMNS:  # to_frame wrote it over the set's own column, objective() never gave it
+                raise ValueError(f"extra: {k!r} names a value the set holds itself ({', '.join(_OWN_COLUMNS)}); "
+                                 "give it another name")
             a = frozen(v)
             if a.shape != (K,):
                 raise ValueError(f"extra[{k!r}] must have shape ({K},), got {a.shape}")
