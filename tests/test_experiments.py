@@ -825,3 +825,9 @@ def test_compare_results_tells_apart_structures_two_stores_define_differently(sm
     assert len(got[("first-order (s)", "s: LS")]) == 4
     assert got[("made", "o: LS")] == got[("made", "s: LS")]  # one meaning in both stores: one name
     assert set(gx.heatmap_table(df).index) == {"first-order (s)", "first-order (o)", "made"}
+    # the same terms in another order, and a product written the other way round, are the same structure
+    same = tmp_path / "same.sqlite"
+    gx.run_grid(gx.Grid(name="o", data=[gx.DataSpec("pumping", bundled="pumping")],
+                        structures=[gx.StructureSpec("first-order", terms=["1", "y(k-1)u(k-1)", "u(k-1)", "y(k-1)"])],
+                        variants=[gx.Variant("LS", "ls")]), same)
+    assert set(gx.compare_results([path, same], labels=["s", "o"])["structure"]) == {"first-order", "made"}

@@ -34,6 +34,7 @@ import pandas as pd
 
 from ..core._files import CAN_FLOCK, folder_now, lock_fd, sweep_leftovers
 from ..core._processes import pid_alive, pid_started
+from ..core._terms import parse_term
 from ..core._validation import check_path, check_sequence
 from ._cell import COLUMNS, JSON_COLUMNS, STATUSES
 from ._spec import Cell, _hash
@@ -1235,8 +1236,13 @@ def _structure_contents(df: pd.DataFrame) -> dict[str, set[str]]:
             continue
         for st in info.get("spec", {}).get("structures", ()):
             if isinstance(st, Mapping) and isinstance(st.get("name"), str):
-                body = json.dumps({k: v for k, v in st.items() if k != "name"}, sort_keys=True)
-                out.setdefault(st["name"], set()).add(body)
+                body = {k: v for k, v in st.items() if k != "name"}
+                for k in ("terms", "include"):  # a set of terms, each as graybox prints it: u(k-1)y(k-1) is y(k-1)u(k-1)
+                    try:
+                        body[k] = sorted(str(parse_term(t)) for t in body[k])
+                    except (KeyError, TypeError, ValueError):
+                        pass  # none, or not terms: compared as written
+                out.setdefault(st["name"], set()).add(json.dumps(body, sort_keys=True))
     return out
 
 
