@@ -1237,7 +1237,8 @@ def _structure_contents(df: pd.DataFrame) -> dict[str, set[str]]:
         for st in info.get("spec", {}).get("structures", ()):
             if isinstance(st, Mapping) and isinstance(st.get("name"), str):
                 body = {k: v for k, v in st.items() if k != "name"}
-                for k in ("terms", "include"):  # a set of terms, each as graybox prints it: u(k-1)y(k-1) is y(k-1)u(k-1)
+                # a set of terms, each as graybox prints it: u(k-1)y(k-1) is y(k-1)u(k-1)
+                for k in ("terms", "include"):
                     try:
                         body[k] = sorted(str(parse_term(t)) for t in body[k])
                     except (KeyError, TypeError, ValueError):
