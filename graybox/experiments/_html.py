@@ -114,7 +114,8 @@ def report_page(df: pd.DataFrame, lb: pd.DataFrame, *, rule: str, summary: Seque
         cols = ["data", "structure", "variant", "seed", "status", "message"]
         parts.append(_table(bad[cols].assign(message=bad["message"].fillna("no message stored")), index=False))
     parts.append("<h2 id=\"leaderboard\">Leaderboard</h2><p>The best model of every (data, structure, variant), "
-                 "ranked within each data set by J_S on the validation record; a row without figures says why in "
+                 "ranked within each data set by J_S on the validation record (models whose J_S agree to a relative "
+                 "1e-8, such as one model fitted twice, share a rank); a row without figures says why in "
                  "<em>reason</em>.</p>")
     units = output_units(attrs) or output_units(df.attrs)
     if units:  # what the figures are in
