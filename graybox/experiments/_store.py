@@ -1287,8 +1287,9 @@ def compare_results(
         Two or more grid stores run on the same data (two paths of one store, e.g. through a
         link, are refused with ``ValueError``: it would be compared with itself).
     labels : sequence of str, optional
-        One label per store (default: the file names without their suffix), without ``": "`` (which parts a label
-        from the variant names it prefixes, so that no two stores' variants read alike).
+        One label per store (default: the file names without their suffix, a ``": "`` in them read as ``":"``),
+        without ``": "`` (which parts a label from the variant names it prefixes, so that no two stores' variants
+        read alike).
     spec : "latest", "all" or int
         Which cells of each store (see :func:`load_results`).
 
@@ -1315,11 +1316,10 @@ def compare_results(
         if at in seen_at:
             raise ValueError(f"{seen_at[at]} and {p} are the same store: compare two or more different stores")
         seen_at[at] = p
-    given = labels
     if labels is None:
-        labels = [p.stem for p in paths]
-        if len(set(labels)) < len(labels):
-            labels = [f"{i + 1}:{p.stem}" for i, p in enumerate(paths)]
+        # a file name's ': ', which parts a label from its variants, as ':' ("run: 2.sqlite" is "run:2")
+        stems = [re.sub(": +", ":", p.stem) for p in paths]
+        labels = stems if len(set(stems)) == len(stems) else [f"{i + 1}:{s}" for i, s in enumerate(stems)]
     labels = list(check_sequence(labels, "labels", "a sequence of names, one per store"))
     for lab in labels:  # each prefixes its store's variants ("label: name") in every table and figure
         if not isinstance(lab, str):
@@ -1328,7 +1328,7 @@ def compare_results(
             raise ValueError(f"labels must be non-empty names, one per store; got {lab!r}")
         if ": " in lab:  # "a" + "b: X" and "a: b" + "X" both read "a: b: X": two stores' variants in one group
             raise ValueError(f"labels must not hold ': ', which parts a label from its variant names ('label: name'); "
-                             f"got {lab!r}" + (" (a store's file name: give labels=)" if given is None else ""))
+                             f"got {lab!r}")
     if len(labels) != len(paths) or len(set(labels)) != len(labels):
         raise ValueError(f"labels must be {len(paths)} distinct names, one per store; got {labels}")
     frames = [load_results(p, spec=spec) for p in paths]
