@@ -830,3 +830,18 @@ def test_compare_results_tells_apart_structures_two_stores_define_differently(sm
                         structures=[gx.StructureSpec("first-order", terms=["1", "y(k-1)u(k-1)", "u(k-1)", "y(k-1)"])],
                         variants=[gx.Variant("LS", "ls")]), same)
     assert set(gx.compare_results([path, same], labels=["s", "o"])["structure"]) == {"first-order", "made"}
+
+
+def test_all_specs_keep_a_band_free_cell_under_each_data_set_that_shares_it(tmp_path):
+    # two data sets of one content with two bands share their band-free cells (least squares: one key); read with
+    # spec="all", each cell was one row under the first data set name, and "loose" had no LS at all
+    path = tmp_path / "s.sqlite"
+    gx.run_grid(gx.Grid(name="two bands", data=[gx.DataSpec("tight", bundled="pumping", band=0.01),
+                                                gx.DataSpec("loose", bundled="pumping", band=0.5)],
+                        structures=[gx.StructureSpec("fo", terms=["y(k-1)", "u(k-1)", "1"])],
+                        variants=[gx.Variant("LS", "ls")]), path)
+    latest, every = gx.load_results(path), gx.load_results(path, spec="all")
+    assert latest["key"].nunique() == 1 and every.attrs["n_cells"] == latest.attrs["n_cells"] == 2
+    cols = ["data", "structure", "variant", "status", "band", "JS_valid"]
+    pd.testing.assert_frame_equal(every[cols], latest[cols])
+    assert set(gx.leaderboard(every, rule="chosen").index.get_level_values("data")) == {"tight", "loose"}

@@ -949,9 +949,9 @@ def read_store(path: str | os.PathLike, spec: str | int = "latest") -> tuple[dic
                 row["band"] = bands.get(row["data"], row["band"])
                 rows.append(row)
         else:
-            rows = _all_rows(conn, cols, {s["id"]: _spec_bands(s) for s in specs})
-            # the cells the specs hold, run or not: a spec's cells not run yet are left, not absent
-            n = conn.execute("SELECT COUNT(*) FROM (SELECT DISTINCT key FROM spec_cells)").fetchone()[0]
+            # the cells the specs hold, run or not (a spec's cells not run yet are left, not absent), one under each
+            # data set name its first spec gives it
+            rows, n = _all_rows(conn, cols, {s["id"]: _spec_bands(s) for s in specs})
     except sqlite3.DatabaseError as exc:
         raise StoreError(f"{p} is damaged ({exc}); {_DAMAGED}") from None
     finally:
@@ -969,19 +969,25 @@ def _spec_bands(spec: Mapping[str, Any]) -> dict[str, float | None]:
 
 
 def _all_rows(conn: sqlite3.Connection, cols: str, bands: Mapping[int, Mapping[str, float | None]]
-              ) -> list[dict[str, Any]]:
-    """Every cell once, named by the first spec that holds it; names with two meanings told apart. Its band is the
+              ) -> tuple[list[dict[str, Any]], int]:
+    """Every cell once under each data set name the first spec that holds it gives it (two data sets of one
+    content share their band-free cells), named by that spec; names with two meanings told apart; and how many such
+    rows the specs hold, run or not. Its band is the
     largest the specs holding it give its data set under the name the row shows (:func:`_spec_bands`): a cell that
     reads no band is one result under each of them, and a variant that reads it has a cell under each, whose members
     the leaderboard judges each by its own; judged by the first spec's band alone, the same Pareto set or model
     qualified in the one variant and not in the other."""
     entries = conn.execute("SELECT spec, position, key, data, structure, variant, structure_hash, variant_hash "
                            "FROM spec_cells ORDER BY spec, position").fetchall()
-    first: dict[str, tuple] = {}
+    # key -> the places the first spec holding it gives it: one cell is one result under each of its data set names
+    # there (two data sets of one content, say with two bands, share their band-free cells)
+    first: dict[str, list[tuple]] = {}
     held: dict[tuple[str, str], list[float | None]] = {}  # (key, data set name) -> each band a spec holding it gives
     meanings: dict[tuple[str, str], dict[str, int]] = {}  # (kind, name) -> content hash -> first spec
     for spec, pos, key, d, s, v, sh, vh in entries:
-        first.setdefault(key, (spec, pos, s, v, sh, vh))
+        places = first.setdefault(key, [])
+        if not places or (places[0][0] == spec and all(p[2] != d for p in places)):
+            places.append((spec, pos, d, s, v, sh, vh))
         if d in bands.get(spec, {}):
             held.setdefault((key, d), []).append(bands[spec][d])
         meanings.setdefault(("structure", s), {}).setdefault(sh, spec)
@@ -1010,24 +1016,24 @@ def _all_rows(conn: sqlite3.Connection, cols: str, bands: Mapping[int, Mapping[s
 
     rows = []
     for r in conn.execute(f"SELECT {cols} FROM cells c").fetchall():
-        row = dict(zip(COLUMNS, r))
-        f = first.get(row["key"])
-        if f is not None:
-            spec, pos, s, v, sh, vh = f
-            row.update(structure=label("structure", s, sh), variant=label("variant", v, vh))
+        cell = dict(zip(COLUMNS, r))
+        places = first.get(cell["key"])
+        if not places:  # not reachable through the API: every cell is registered before it runs
+            rows.append({**cell, "_order": (10**9, cell["cell_index"])})
+            continue
+        for spec, pos, d, s, v, sh, vh in places:
+            row = dict(cell, data=d, structure=label("structure", s, sh), variant=label("variant", v, vh))
             # the bands given to the data set by the name the row shows (a data set renamed in a later spec keeps its
             # rows under the first name, ranked apart from the new name's)
-            at = (row["key"], row["data"])
+            at = (row["key"], d)
             given = [b for b in held.get(at, ()) if b is not None]
             row["band"] = max(given) if given else None if at in held else row["band"]
             row["_order"] = (spec, pos)
-        else:  # not reachable through the API: every cell is registered before it runs
-            row["_order"] = (10**9, row["cell_index"])
-        rows.append(row)
+            rows.append(row)
     rows.sort(key=lambda r: r.pop("_order"))
     for i, row in enumerate(rows):
         row["cell_index"] = i
-    return rows
+    return rows, sum(len(p) for p in first.values())
 
 
 def output_units(attrs: Mapping) -> dict[str, str]:
@@ -1123,7 +1129,8 @@ def load_results(path: str | os.PathLike, *, spec: str | int = "latest") -> pd.D
         of spec number ``spec`` (:func:`store_specs` lists them). With "all", a structure or
         variant name that stood for different contents in different specs is followed by the
         spec that defined it, e.g. ``"PE (spec 2)"`` (and by its content's hash where a spec gives that name to
-        another variant: no two meanings share a name).
+        another variant: no two meanings share a name); a cell two data sets of one content share (a band-free
+        one) is a row under each name the first spec holding it gives it, as that spec reads it.
 
     Returns
     -------
