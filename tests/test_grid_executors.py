@@ -695,3 +695,28 @@ def test_a_dask_run_whose_scheduler_is_killed_ends_with_a_connection_error_that_
             p.wait()
         with suppress(Exception):
             client.close(timeout=2)
+
+
+_CALLBACK_WORKER = """
+import ctypes, os, signal, sys, threading, time
+from graybox.experiments._executors import exit_on_sigterm
+exit_on_sigterm()
+def busy(x):  # Python called back from C, as numba's compiler calls it through ctypes
+    t = time.monotonic()
+    while time.monotonic() - t < 1.0:
+        pass
+    return x
+cb = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_int)(busy)
+threading.Timer(0.3, os.kill, (os.getpid(), signal.SIGTERM)).start()
+for i in range(3):
+    cb(i)
+print("the cell ran on")
+"""
+
+
+def test_a_worker_stopped_inside_a_callback_exits_without_a_traceback():
+    # a SIGTERM landing while a worker ran Python called back from C (numba compiling) raised its SystemExit inside
+    # the callback: ctypes printed it as 'Exception ignored ... Traceback' and the worker ran its cell on
+    r = subprocess.run([sys.executable, "-c", _CALLBACK_WORKER], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0 and "the cell ran on" not in r.stdout, (r.stdout, r.stderr)
+    assert r.stderr == ""

@@ -32,6 +32,7 @@ import multiprocessing as mp
 import os
 import shutil
 import signal
+import sys
 import tempfile
 import threading
 import time
@@ -174,6 +175,31 @@ def _exit_on_sigterm(signum, frame) -> None:  # pragma: no cover - runs in the c
     raise SystemExit(0)
 
 
+def exit_on_sigterm() -> None:  # pragma: no cover - runs in the child process
+    """Make SIGTERM end this (worker) process through Python's clean-up, even when it lands in a callback."""
+    signal.signal(signal.SIGTERM, _exit_on_sigterm)
+    sys.unraisablehook = _exit_past_callbacks
+
+
+def _exit_past_callbacks(args) -> None:  # pragma: no cover - runs in the child process
+    """sys.unraisablehook of a worker: a SIGTERM whose SystemExit was raised inside a C library's callback into
+    Python (numba compiling through ctypes) or a finaliser is swallowed there, printed as 'Exception ignored ...
+    Traceback', and the worker ran its cell on. It is raised again at the next call outside this hook (a profile
+    function's first event): the caller's next line, or inside the next callback, which lands here again."""
+    if not isinstance(args.exc_value, SystemExit):
+        sys.__unraisablehook__(args)
+        return
+    here = sys._getframe()
+
+    def stop(frame, event, arg):
+        if frame is here:  # this hook's own return
+            return
+        sys.setprofile(None)
+        raise SystemExit(0)
+
+    sys.setprofile(stop)
+
+
 #: What a pool worker sends when it starts a cell (before its row): the cell's time limit counts from it, not
 #: from the worker's own start-up.
 STARTED = "started"
@@ -192,7 +218,7 @@ def _worker_main(conn, fn: CellFn) -> None:  # pragma: no cover - runs in the ch
     SIGTERM or the death of the process that started it."""
     # stopped mid-cell (the driver interrupted), exit through Python's clean-up: a killed worker leaves
     # numba's named semaphore behind, for the resource tracker to warn of
-    signal.signal(signal.SIGTERM, _exit_on_sigterm)
+    exit_on_sigterm()
     threading.Thread(target=_exit_when_orphaned, args=(os.getppid(),), daemon=True,
                      name="graybox worker's parent watch").start()
     cache: dict[str, gb.Dataset] = {}
