@@ -168,3 +168,21 @@ def test_a_toa5_file_thinned_to_every_kth_record_reads_and_its_gaps_are_still_na
         gb.load_record_csv(write([10, 12, 14, 18, 20]), u="Power", y="Temp", Ts=2.0)
     with pytest.raises(ValueError, match=r"jumps from 11 \(line 6\) to 13 \(line 7\): 1 record\(s\) missing"):
         gb.load_record_csv(write([10, 11, 13, 14, 15]), u="Power", y="Temp", Ts=1.0)
+
+
+def test_a_thinned_toa5_files_step_off_its_thinning_is_said_as_such_not_as_a_fraction_of_records(tmp_path):
+    """A step of a thinned file that is no multiple of its usual step read '0 record(s) missing (it holds one record
+    in 2: -0.5 of those)' (16 to 17) and '14 record(s) missing (… one record in 10: 0.5 of those)' (30 to 45)."""
+    f = tmp_path / "thin.dat"
+
+    def write(records):
+        f.write_text(TOA5_HEAD + "".join(f'"2026-01-01 00:00:{2 * k:02d}",{r},1.0,2.{k}\n'
+                                         for k, r in enumerate(records)), encoding="utf-8")
+        return f
+
+    for records, where, step, usual in (([10, 12, 14, 16, 17, 19, 21], r"from 16 \(line 8\) to 17 \(line 9\)", 1, 2),
+                                        ([10, 20, 30, 45, 55, 65], r"from 30 \(line 7\) to 45 \(line 8\)", 15, 10)):
+        with pytest.raises(ValueError, match=rf"steps {where}, by {step}, where the file's other lines step by "
+                                             rf"{usual} \(one record in {usual} kept\)") as info:
+            gb.load_record_csv(write(records), u="Power", y="Temp", Ts=2.0)
+        assert "of those" not in str(info.value) and "0 record(s)" not in str(info.value)

@@ -995,8 +995,9 @@ def load_record_csv(
         a line of units, a line of processing codes such as ``Smp``/``Avg``/``Max``, then the
         samples) is read without options: the names from line 2, the record's units from line 3 (as
         ``units_row=True`` reads a units row), line 4 no sample, and messages name the file's own
-        lines; its ``RECORD`` numbers must step by one (records missing from the file or
-        repeated in it are refused naming the lines); give ``time="TIMESTAMP"`` (or ``Ts``, or both: checked
+        lines; its ``RECORD`` numbers must step by one, or by k throughout in a file thinned to every k-th
+        record (whose ``Ts`` is then k logger periods; records missing from the file or repeated in it are refused
+        naming the lines); give ``time="TIMESTAMP"`` (or ``Ts``, or both: checked
         against each other) to have its stamps checked too: a pause of the logger, whose record numbers run on,
         shows only there. A binary TOB1/TOB2/TOB3 file is refused: convert it to TOA5 with
         CardConvert.
@@ -1405,6 +1406,12 @@ def _check_record_numbers(p: Path, rec: np.ndarray, lines: np.ndarray) -> None:
         return f"{v:.0f}" if float(v).is_integer() else exact_text(v)
 
     where = f"from {text(a)} (line {lines[i]}) to {text(b)} (line {lines[i + 1]})"
+    if b > a and usual != 1 and not float((b - a) / usual).is_integer():
+        # no whole number of the thinned steps: no count of records missing says it (it read '-0.5 of those')
+        raise ValueError(f"{p}: column 'RECORD', the TOA5 file's record numbers, steps {where}, by {text(b - a)}, "
+                         f"where the file's other lines step by {usual:.0f} (one record in {usual:.0f} kept): the "
+                         "samples either side are no one record at one sampling period; cut the file into two "
+                         "records there (several records of one plant go to the estimators as a list)")
     if b > a:
         thinned = "" if usual == 1 else (f" (it holds one record in {usual:.0f}: {text((b - a) / usual - 1)} of "
                                          "those)")
