@@ -533,3 +533,21 @@ def test_a_transient_input_is_computed_inside_the_nonlinear_system_from_its_sour
     # a step whose square overflows is the run's divergence, said as for any other (not numpy's overflow warning)
     with pytest.raises(gb.DivergenceError, match="diverged"):
         ct.input_output_response(sysm, 0.5 * np.arange(5), np.vstack([[1000.0, 1e200, 0, 0, 0], np.zeros(5)]), x0)
+
+
+def test_a_transient_input_decays_per_step_as_in_the_records_when_ts_relabels_a_one_second_model():
+    # a model fitted on a record made without Ts= (1 s) has u_tau3 computed with ρ = exp(−1/3) per step; given the
+    # real period, narx_iosystem(model, Ts=0.05) computed it with exp(−0.05/3) and ran 3924 off Model.simulate
+    model = Model(["1", "y(k-1)", "u(k-1)", "u(k-1)^2", "u_tau3(k-2)"], [0.1, 0.6, 0.002, 1e-6, -0.5],
+                  input_names=("u", "u_tau3"), Ts=1.0)
+    u = np.r_[np.full(4, 1000.0), np.full(10, 1100.0), np.full(10, 950.0)]
+    rec = gb.transient_inputs(gb.Record(u=u, y=np.full(u.size, 7.75)), taus=[3])
+    y = model.simulate(rec)
+    assert np.ptp(y) > 1000  # the transient term moves the output
+    L = model.max_lag
+    x0 = gb.narx_initial_state(model, rec)
+    for Ts in (None, 0.05):
+        sysm = gb.narx_iosystem(model, Ts=Ts)
+        assert sysm.dt == (Ts or 1.0)
+        r = ct.input_output_response(sysm, sysm.dt * np.arange(u.size - L), u[L:], x0)
+        np.testing.assert_allclose(r.outputs, y[L:], rtol=1e-12, atol=1e-9)

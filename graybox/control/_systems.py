@@ -251,8 +251,8 @@ def narx_iosystem(model: Model, *, Ts: float | None = None, noise: bool = False,
         A polynomial NARX model.
     Ts : float, optional
         Sampling period (s); default the model's own (``model.Ts``, the period it was identified at), as
-        for :func:`local_model` (another than the model's own refused but over its 1 s). Needed for a model that does
-        not know its period.
+        for :func:`local_model` (another than the model's own refused but over its 1 s, where a transient input keeps
+        the decay per step its records had). Needed for a model that does not know its period.
     noise : bool
         Add the noise e(k) as a last system input ``"noise"`` (output units; not ``"e"``, the name a loop's
         error signal usually has, which ``control.interconnect`` would join to it by name) and the model's linear MA
@@ -290,9 +290,11 @@ def narx_iosystem(model: Model, *, Ts: float | None = None, noise: bool = False,
     n_proc = E.shape[1]  # the process states; the noise lags follow
     fed = np.array(lay.fed, dtype=np.intp)
     m = fed.size  # the system's inputs from the model's; the noise input follows
-    # each transient input computed as transient_inputs computes it at this period: (its row z(k−1), its source
-    # input, the source's row u(k−1), ρ = exp(−Ts/τ), 1 − ρ)
-    transient = [(j, lay.u_rows[j][0], i, lay.u_rows[i][0], np.exp(-Ts / tau), -np.expm1(-Ts / tau))
+    # each transient input computed as transient_inputs computed it for the records: (its row z(k−1), its source
+    # input, the source's row u(k−1), ρ = exp(−Ts/τ), 1 − ρ) at the model's own period, whose steps its τ was read
+    # in (a Ts given over a model's 1 s, records made without Ts=, relabels the steps, not the decay per step)
+    Tz = Ts if model.Ts is None else model.Ts
+    transient = [(j, lay.u_rows[j][0], i, lay.u_rows[i][0], np.exp(-Tz / tau), -np.expm1(-Tz / tau))
                  for j, i, tau in lay.transient]
 
     label = name if name is not None else system_name(model.name, "narx")
