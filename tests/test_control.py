@@ -551,3 +551,15 @@ def test_a_transient_input_decays_per_step_as_in_the_records_when_ts_relabels_a_
         assert sysm.dt == (Ts or 1.0)
         r = ct.input_output_response(sysm, sysm.dt * np.arange(u.size - L), u[L:], x0)
         np.testing.assert_allclose(r.outputs, y[L:], rtol=1e-12, atol=1e-9)
+
+
+def test_a_nameless_models_divergence_names_the_system_not_none():
+    # a model without a name (python-control then numbers the system) said 'None: the model's output is no longer a
+    # finite number …'
+    model = Model(["y(k-1)", "u(k-1)"], [2.0, 1.0], Ts=1.0)
+    with pytest.raises(gb.DivergenceError, match=r"^narx_iosystem's system: the model's output") as e:
+        ct.input_output_response(gb.narx_iosystem(model), np.arange(2000.0), np.ones(2000), np.zeros(2))
+    assert not str(e.value).startswith("None")
+    named = dataclasses.replace(model, name="tank")
+    with pytest.raises(gb.DivergenceError, match=r"^tank_narx: "):
+        ct.input_output_response(gb.narx_iosystem(named), np.arange(2000.0), np.ones(2000), np.zeros(2))

@@ -298,6 +298,7 @@ def narx_iosystem(model: Model, *, Ts: float | None = None, noise: bool = False,
                  for j, i, tau in lay.transient]
 
     label = name if name is not None else system_name(model.name, "narx")
+    said = label if label is not None else "narx_iosystem's system"  # a nameless model's: python-control numbers it
 
     def output(t, x, u, params):
         x = np.asarray(x, float)
@@ -309,7 +310,7 @@ def narx_iosystem(model: Model, *, Ts: float | None = None, noise: bool = False,
             # numpy's overflow warnings and python-control's "algebraic loop detected" (there is no
             # feedthrough) would hide what happened: the run diverged, as Model.simulate says it
             raise DivergenceError(
-                f"{label}: the model's output is no longer a finite number at t = {float(t):g} s (its state "
+                f"{said}: the model's output is no longer a finite number at t = {float(t):g} s (its state "
                 f"reached {np.max(np.abs(x)):.3g}): the run diverged, e.g. a loop whose controller gain is too "
                 "high or of the wrong sign at this operating point, or a model unstable along this input")
         return np.array([y])
