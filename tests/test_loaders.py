@@ -512,3 +512,25 @@ def test_a_short_line_whose_quote_took_in_its_fields_says_so(tmp_path):
     f.write_text('t,u,y,note\n0,1,2,ok\n1,2,3,ok\n"2,3,4,x\n', encoding="utf-8")
     with pytest.raises(ValueError, match=r"line 4 has 1 field\(s\).*one field, '2,3,4,x', is quoted and holds ','"):
         load_record_csv(f, u="u", y="y", time="t")
+
+
+def test_a_note_over_lines_in_the_first_column_is_a_cell_not_a_quote_left_open(tmp_path):
+    """csv.writer and pandas.to_csv quote a note holding a line break; in the first column its last line runs on into
+    the sample's numbers ('break",3.5,0.56'), which read as a sample quotes removed and were refused as a quote left
+    open (the file is valid CSV: pandas reads it)."""
+    import csv
+
+    f = tmp_path / "notes.csv"
+    rows = [("note", "t", "u", "y"), ("line\nbreak", 3.0, 0.5, -1.0), ("", 3.5, 0.25, 2.0),
+            ("ends\n", 4.0, 1.0, 4.0), ('two\n"quoted"\nlines', 4.5, 2.0, 8.0), ("a", 5.0, 3.0, 16.0)]
+    for terminator in ("\n", "\r\n"):
+        with open(f, "w", newline="", encoding="utf-8") as out:
+            csv.writer(out, lineterminator=terminator).writerows(rows)
+        r = load_record_csv(f, "u", "y", time="t")
+        assert r.u.tolist() == [0.5, 0.25, 1.0, 2.0, 3.0] and r.y.tolist() == [-1.0, 2.0, 4.0, 8.0, 16.0]
+        assert r.Ts == 0.5
+    # a date's closing quote missing, closed by the next line's opening quote, is refused as before
+    f.write_text('"date",u,y\n"2026-01-01 00:00:00",1,2\n"2026-01-01 00:00:01,2,3\n"2026-01-01 00:00:02",3,4\n',
+                 encoding="utf-8")
+    with pytest.raises(ValueError, match=r"line 3.*closes only on line 4"):
+        load_record_csv(f, "u", "y", Ts=1.0)

@@ -319,6 +319,11 @@ def _refuse_swallowed(p: Path, text: str, row: Sequence[str], start: int, line: 
     # ends the cell, its other cells are the sample's, and the sample where the quote opened is lost
     spanned = itertools.islice(io.StringIO(text, newline=""), start + 1, start + 1 + end - line)
     for k, physical in enumerate(spanned, start=line + 1):
+        lead = physical.lstrip(" \t")
+        if not lead.startswith('"') or lead[1:2] in ('"', delim, "\r", "\n", ""):
+            # no field opens there: the line goes on a quoted cell (a note over lines, valid CSV: its last line
+            # 'break",3.5,0.56' reads as a sample quotes removed), or its quote is doubled or closes the cell
+            continue
         bare = physical.rstrip("\r\n").replace('"', "")
         cells = _split(bare, delim)
         if _width(bare, delim, len(header)) == len(header) > 1 and all(_numeric(cells[j], decimal) for j in numeric):
