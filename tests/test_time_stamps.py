@@ -186,3 +186,16 @@ def test_a_thinned_toa5_files_step_off_its_thinning_is_said_as_such_not_as_a_fra
                                              rf"{usual} \(one record in {usual} kept\)") as info:
             gb.load_record_csv(write(records), u="Power", y="Temp", Ts=2.0)
         assert "of those" not in str(info.value) and "0 record(s)" not in str(info.value)
+
+
+def test_a_toa5_file_with_its_units_and_processing_codes_swapped_is_refused_not_read_as_units(tmp_path):
+    """Lines 3 and 4 swapped (the codes first) read the processing codes as the record's units, ('Smp', 'Avg')."""
+    f = tmp_path / "swapped.dat"
+    head = TOA5_HEAD.splitlines(keepends=True)
+    rows = "".join(f'"2026-01-01 00:00:{k:02d}",{k},1.{k},2.{k}\n' for k in range(5))
+    f.write_text(head[0] + head[1] + head[3] + head[2] + rows, encoding="utf-8")
+    with pytest.raises(ValueError, match=r"line 3 gives column 'Power' the unit 'Smp', one of a TOA5 file's "
+                                         r"processing codes"):
+        gb.load_record_csv(f, u="Power", y="Temp", time="TIMESTAMP")
+    f.write_text("".join(head) + rows, encoding="utf-8")  # in order: the units
+    assert gb.load_record_csv(f, u="Power", y="Temp", time="TIMESTAMP").units == ("W", "degC")

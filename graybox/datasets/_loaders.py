@@ -199,6 +199,12 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
         index[role] = header.index(col)
     toa5 = " (a TOA5 file's units)" if codes_row else ""
     units = None if unit_line is None else _units_of_row(p, unit_line, delim, index, first + 1 + blanks, toa5)
+    coded = [(wanted[r], u) for r, u in (units or {}).items() if codes_row and u in _TOA5_CODES]
+    if coded:  # lines 3 and 4 swapped (or edited): the codes would be the record's units without a word
+        raise ValueError(f"{p}: line {first + 1} gives column {coded[0][0]!r} the unit {coded[0][1]!r}, one of a TOA5 "
+                         "file's processing codes (Smp, Avg, Max …), which belong on line 4: the file's header lines "
+                         "were swapped or edited; a TOA5 file has its column names on line 2, their units on line 3 "
+                         "and the processing codes on line 4: collect or convert the file again, or put them in order")
     if code_line is not None:
         _check_codes_row(p, code_line, delim, index, wanted, first + 2)
         if header.count("RECORD") == 1:  # a TOA5 file's record numbers, read to find a gap (load_record_csv)
@@ -369,6 +375,10 @@ def _check_codes_row(p: Path, line: str, delim: str, index: dict[str, int], want
                              "2, their units on line 3 and the processing codes on line 4, then its samples: "
                              "collect or convert the file again")
 
+
+#: The processing codes of a TOA5 file's line 4 (LoggerNet's manual, appendix B: the output instructions' suffixes)
+_TOA5_CODES = frozenset({"Smp", "Avg", "Max", "Min", "Tot", "Std", "TMx", "TMn", "SMM", "MMT", "Hst", "H4D", "FFT",
+                         "Cov", "RFH", "LCr", "WVc", "Med", "ETsz", "RSo"})
 
 #: Line 1 of a TOA5 file: its first field TOA5, quoted (as Campbell Scientific's software writes it) or not, then a
 #: comma, or the ';' or tab of a copy a spreadsheet saved again (Excel in a decimal-comma locale).
@@ -1079,7 +1089,7 @@ def load_record_csv(
         below the header line (a header block not skipped, or skipped too far), a ``sep=`` line that
         disagrees with ``delimiter=``, a negative ``skiprows``, a ``skiprows`` or ``units_row`` that
         contradicts a TOA5 file, a TOA5 file whose header lines were cut (numbers on its units or
-        processing-codes line) or a gap in its ``RECORD`` numbers, a binary TOB1/TOB2/TOB3 file, an empty cell, NaN/inf or text in a used column, non-increasing or uneven stamps, Ts disagreeing
+        processing-codes line) or swapped (processing codes on its units line) or a gap in its ``RECORD`` numbers, a binary TOB1/TOB2/TOB3 file, an empty cell, NaN/inf or text in a used column, non-increasing or uneven stamps, Ts disagreeing
         with the stamps, or neither ``time`` nor ``Ts`` given; an empty file, a header without
         rows, mixed delimiters, a decimal comma with an unquoted comma delimiter, a delimiter or
         decimal mark that the first lines leave ambiguous (pass ``delimiter=`` / ``decimal=``), a
