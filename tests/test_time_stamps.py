@@ -199,3 +199,19 @@ def test_a_toa5_file_with_its_units_and_processing_codes_swapped_is_refused_not_
         gb.load_record_csv(f, u="Power", y="Temp", time="TIMESTAMP")
     f.write_text("".join(head) + rows, encoding="utf-8")  # in order: the units
     assert gb.load_record_csv(f, u="Power", y="Temp", time="TIMESTAMP").units == ("W", "degC")
+
+
+def test_iso_end_of_day_24_00_reads_as_the_next_midnight_and_a_leap_second_is_named(tmp_path):
+    """ISO 8601's 24:00:00 (the day's end) and UTC's leap second 23:59:60 were refused as 'not an ISO 8601 date and
+    time', which both are."""
+    f = _csv(tmp_path / "end.csv", ["2016-12-31 23:59:58", "2016-12-31 23:59:59", "2016-12-31 24:00:00",
+                                    "2017-01-01 00:00:01"])
+    assert gb.load_record_csv(f, u="u", y="y", time="t").Ts == 1.0
+    f = _csv(tmp_path / "clock.csv", ["23:59:58", "23:59:59", "24:00:00", "00:00:01"])
+    assert gb.load_record_csv(f, u="u", y="y", time="t").Ts == 1.0
+    f = _csv(tmp_path / "leap.csv", ["2016-12-31 23:59:59", "2016-12-31 23:59:60", "2017-01-01 00:00:00"])
+    with pytest.raises(ValueError, match=r"line 3, column 't': '2016-12-31 23:59:60' is a leap second"):
+        gb.load_record_csv(f, u="u", y="y", time="t")
+    f = _csv(tmp_path / "bad.csv", ["2016-12-31 23:59:59", "2016-12-31 24:00:01"])
+    with pytest.raises(ValueError, match=r"'2016-12-31 24:00:01' is not an ISO 8601 date and time"):
+        gb.load_record_csv(f, u="u", y="y", time="t")

@@ -1026,9 +1026,9 @@ def load_record_csv(
         dates and times (``2026-11-20 09:14:03.5``, ``2026-11-20T09:14:03Z``, a TOA5 file's ``TIMESTAMP``; with a
         UTC offset the elapsed time is read, so a clock change is no jump, while local times without one that jump
         by an hour are refused as one), or clock times with seconds (``09:14:03.5``, midnight passed read as the
-        next day). Dates in another order (``20.11.2026``, ``11/20/2026``) are refused: leave ``time`` out and
-        give ``Ts``, or convert the column. Stamps must
-        increase strictly and evenly: every
+        next day; ISO's 24:00:00 is the next midnight, and a leap second, 23:59:60, is refused). Dates in
+        another order (``20.11.2026``, ``11/20/2026``) are refused: leave ``time`` out and give ``Ts``, or
+        convert the column. Stamps must increase strictly and evenly: every
         step within ``time_rtol`` × (median step) of the median step (and of what float64 resolves of
         stamps far from zero, e.g. Unix time). The sampling period is the mean step, rounded to 12
         significant digits, or to those the stamps' float64 values resolve (about 5 for Unix time).
@@ -1251,8 +1251,15 @@ def _stamps(p: Path, col: str, cells: Sequence[str], lines: Sequence[int],
             else:
                 h, mi, sec, f = m.groups()
                 days, shift = 0, 0
-            clock = dt_time(int(h), int(mi), int(sec or 0))  # refuses 25:00, 09:61
-            whole[k] = 86400 * days + 3600 * clock.hour + 60 * clock.minute + clock.second - shift
+            if int(sec or 0) == 60 and int(mi) == 59:  # UTC's leap second: no count of elapsed seconds past it here
+                raise ValueError(f"{p}: line {line}, column {col!r}: {c!r} is a leap second (23:59:60 UTC), which "
+                                 "the seconds elapsed are not read across (the stamps either side are 2 s apart, "
+                                 "read as 1 s); cut the file into two records there, or write the stamps in GPS or "
+                                 "TAI time, which have none")
+            end_of_day = (h, mi, int(sec or 0), f) == ("24", "00", 0, f) and not (f or "0").strip("0")
+            # ISO 8601's 24:00:00 is the day's end, the next day's 00:00:00
+            clock = dt_time(0 if end_of_day else int(h), int(mi), int(sec or 0))  # refuses 25:00, 09:61
+            whole[k] = 86400 * (days + end_of_day) + 3600 * clock.hour + 60 * clock.minute + clock.second - shift
             frac[k] = float("0." + f) if f else 0.0
         except ValueError as exc:
             if str(exc).startswith(str(p)):
