@@ -856,7 +856,8 @@ def _fast_columns(p: Path, index: dict[str, int], *, raw: bytes, text: Callable[
     if raw.count(b"\r") != raw.count(b"\r\n"):
         return None
     if b'"' in raw:  # quoted fields (a TOA5 file's, every text field quoted): read without their quotes, if whole
-        raw = _unquoted(raw, delimiter)
+        # (after a byte-order mark, which is no field's: the header's first quote opens the line)
+        raw = _unquoted(raw[len(codecs.BOM_UTF8):] if raw.startswith(codecs.BOM_UTF8) else raw, delimiter)
         if raw is None:
             return None
         unquoted = raw
