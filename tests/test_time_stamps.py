@@ -123,6 +123,20 @@ def test_seconds_at_the_usual_sampling_rates_are_never_taken_for_serial_dates(tm
     assert gb.load_record_csv(f, u="u", y="y", time="t").Ts == pytest.approx(1 / rate, rel=1e-9)
 
 
+# 44.1 and 88.2 kHz (audio) step by 1.96 s and 0.98 s of a day, and 1/0.0007 s by 60.5 s: within 5 % of 2 s, 1 s and
+# 60 s, they were refused as serial dates; the stamps' 12 decimals leave their step known far closer than that. (The
+# period is rounded to the 7 digits float stamps near 30000 s resolve of it, as documented.)
+@pytest.mark.parametrize("rate", [44100.0, 88200.0, 1 / 0.0007])
+def test_seconds_at_rates_near_a_round_fraction_of_a_day_are_not_taken_for_serial_dates(tmp_path, rate):
+    f = _csv(tmp_path / "s.csv", [f"{30000 + k / rate:.12f}" for k in range(20)])
+    assert gb.load_record_csv(f, u="u", y="y", time="t").Ts == pytest.approx(1 / rate, rel=1e-6)
+    # the same stamps as serial dates written to 11 digits, 1e-6 of a day, still refused at 2 s, 1 s and 60 s
+    near = {44100.0: 2.0, 88200.0: 1.0}.get(rate, 60.0)
+    f = _csv(tmp_path / "d.csv", [f"{46000.5 + k * near / 86400:.11g}" for k in range(20)])
+    with pytest.raises(ValueError, match=rf"serial dates.*a step of {near:g} s"):
+        gb.load_record_csv(f, u="u", y="y", time="t")
+
+
 @pytest.mark.parametrize("year", [1600, 2026, 2300, 9999])
 def test_stamps_of_any_year_are_read_alike(tmp_path, year):
     """numpy's nanosecond dates hold the years 1678-2261 and wrap others silently (2300 read as 1715)."""

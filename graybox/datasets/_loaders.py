@@ -1282,17 +1282,29 @@ _ROUND_PERIODS = np.array([m * 10.0**e for e in range(-3, 4) for m in (1, 2, 5) 
 def _refuse_serial_dates(p: Path, col: str, t: np.ndarray) -> None:
     """A ``ValueError`` when numeric stamps are a spreadsheet's serial dates (days since 1899-12-30, what Excel
     writes for a date cell formatted as a number: 46000.5 is 2025-12-09 12:00): every stamp a day of the years
-    1954-2201 and the mean step within 5 % of a round period as a fraction of a day (1 s is 1.157e-5),
-    where read as seconds the record's period would be 86,400 times too short without a word. Seconds that look
-    so are sampled at 86.4 kHz / (1, 2, 5 …), a rate no acquisition uses (100 kHz is 0.864 s of a day: 14 % off).
+    1954-2201 and the mean step a round period as a fraction of a day (1 s is 1.157e-5), to within what the digits
+    the stamps are written with leave unknown (at least 0.1 %), where read as seconds the record's period would be
+    86,400 times too short without a word. Seconds that look so are sampled at 86.4 kHz / (1, 2, 5 …), a rate no
+    acquisition uses (100 kHz is 0.864 s of a day: 14 % off; 44.1 kHz 1.96 s: 2 %).
     The mean step, not the median: a General cell shows 11 digits, 1e-6 of a day, so 0.1 s steps print as 1e-6 or
-    2e-6 (and are uneven), while their mean keeps the period."""
+    2e-6 (and are uneven), while their mean keeps the period (to 1e-6 day over the record: 4.5 % of 0.1 s at 20
+    samples)."""
     ref = (t[-1] - t[0]) / (t.size - 1)
     if not (t.min() >= 20000 and t.max() < 110000 and 0 < ref < 1):
         return
     seconds = ref * 86400
     near = _ROUND_PERIODS[np.argmin(np.abs(np.log(_ROUND_PERIODS / seconds)))]
-    if abs(seconds / near - 1) > 0.05:
+    # the stamps' last decimal (days): each printed to half of it, so the mean step to it over the N − 1 steps (a 5 %
+    # window took 44.1 kHz seconds, 2 % off 2 s, for dates); the floats tell decimals down to their round-off
+    noise = 64 * float(np.spacing(np.abs(t).max()))
+    places = int(np.floor(np.log10(1e-2 / noise)))
+    last = 10.0**-places
+    for d in range(places + 1):
+        x = t * 10.0**d
+        if np.all(np.abs(x - np.round(x)) < noise * 10.0**d):
+            last = 10.0**-d
+            break
+    if abs(seconds / near - 1) > max(1e-3, last * 86400 / ((t.size - 1) * near)):
         return
     day = datetime(1899, 12, 30) + timedelta(days=float(t[0]))
     raise ValueError(f"{p}: column {col!r} holds {t[0]:.10g} and steps by {ref:.4g}: a spreadsheet's serial dates "
