@@ -134,3 +134,27 @@ def test_els_and_frols_are_the_same_fit_bit_for_bit_on_signals_scaled_by_powers_
         assert np.array_equal(far.theta, _powers_of_two(base.theta, base.structure, ky, ku))
         with np.errstate(over="ignore"):  # an RSS beyond the float range in output units² is inf, as y² there
             assert np.array_equal(far.rss, np.ldexp(base.rss, 2 * ky))
+
+
+_QP_TERMS = ["1", "y(k-1)", "u(k-1)", "u(k-1)^2"]
+
+
+def _qp_points(ky, ku):
+    ub = np.array([0.6, 1.0, 1.5, 1.9])
+    return gb.StaticPoints(np.ldexp(ub, ku), np.ldexp((0.2 * ub + 0.05 * ub**2) / 0.3, ky))
+
+
+@pytest.mark.parametrize("ky, ku", [(515, 0), (-700, 0), (600, 300)])
+def test_cls_and_pe_are_the_same_fit_on_signals_near_the_float_ranges_ends(ky, ku):
+    # at y about 1e155 the R factor of [Ψ, y] squared y (numpy: 'overflow encountered in matmul') and output_scale's y²
+    # overflowed (the QP's step scale fell to 1): the same fit as in ordinary units, θ mapped by powers of two
+    u, y = _plant()
+    fits = [lambda r, p: gb.cls(_QP_TERMS, r).model.theta[None],
+            lambda r, p: gb.pe_thetas(_QP_TERMS, r, p, lambdas=[1.0, 0.5, 1e-3])]
+    for fit in fits:
+        base = fit(gb.Record(u, y), _qp_points(0, 0))
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            far = fit(gb.Record(np.ldexp(u, ku), np.ldexp(y, ky)), _qp_points(ky, ku))
+        for b, f in zip(base, far):
+            np.testing.assert_allclose(f, _powers_of_two(b, _QP_TERMS, ky, ku), rtol=1e-9)

@@ -121,7 +121,16 @@ def output_scale(y: np.ndarray) -> float:
     y = np.asarray(y, float).ravel()
     if y.size == 0:
         return 1.0
-    return spread_scale(float(np.std(y)), float(np.sqrt(np.mean(y**2))))
+    # on y over the power of two above max|y| (exact), mapped back: y² of an output near 1e155 overflowed (the scale
+    # fell to 1, and a QP's step in output units reached 1e155) and near 1e-170 underflowed
+    m = float(np.max(np.abs(y)))
+    e = int(np.frexp(m)[1]) if 0.0 < m < np.inf else 0
+    e = e if 2 * abs(e) > _SAFE_EXPONENT else 0  # ordinary outputs as they are (no copy of a long y)
+    x = np.ldexp(y, -e) if e else y
+    std, rms = float(np.std(x)), float(np.sqrt(np.mean(x**2)))
+    if np.isfinite(std) and std > CONSTANT_RTOL * rms:
+        return math.ldexp(std, e)
+    return math.ldexp(rms, e) if np.isfinite(rms) and rms > 0 else 1.0
 
 
 def scaled_lstsq(A: np.ndarray, b: np.ndarray, rcond: float | None = None) -> np.ndarray:

@@ -338,6 +338,24 @@ def _r_factor(A: np.ndarray) -> np.ndarray:
         return scipy.linalg.qr(A, mode="r", check_finite=False)[0][: A.shape[1]]
 
 
+def _r_factor_target(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    """R of M = [A, y] (A's n columns at unit RMS, y in output units; M's last column is scaled in place) as (R_A
+    (n, n), Q_Aᵀy (n,), the residual's squared norm, output units²: inf or 0 where it leaves the float range, as y²
+    there).
+
+    y is taken over the power of two above max|y| and its column mapped back (exact): the Gram matrix of an output
+    near 1e155 overflowed (yᵀy ≈ 1e312: numpy's 'overflow encountered in matmul', and the fit was lost), of one near
+    1e-170 underflowed."""
+    n = M.shape[1] - 1
+    m = float(np.max(np.abs(M[:, n]), initial=0.0))
+    e = int(np.frexp(m)[1]) if 0.0 < m < np.inf else 0
+    if e:  # in place: no copy beside [A, y] (ls_uncertainty's peak memory holds to a few Ψ)
+        np.ldexp(M[:, n], -e, out=M[:, n])
+    R = _r_factor(M)
+    with np.errstate(over="ignore", under="ignore"):
+        return R[:n, :n], np.ldexp(R[:n, n], e), float(np.ldexp(R[n, n] ** 2, 2 * e))
+
+
 def _dynamic(structure: Structure, records: list) -> _Data:
     if is_dask_data(records):
         return _dynamic_chunked(structure, records)
@@ -353,8 +371,7 @@ def _dynamic(structure: Structure, records: list) -> _Data:
     s = column_scales(psi)
     # R-factor of [Ψ/s, y]: its top-left block is Ψ's triangular factor, its last column Q1ᵀy and
     # its corner the LS residual norm; Q itself is never formed.
-    Raug = _r_factor(np.column_stack([psi / s, y]))
-    return _Data(structure, s, Raug[:n, :n], Raug[:n, n], float(Raug[n, n] ** 2), psi.shape[0], output_scale(y))
+    return _Data(structure, s, *_r_factor_target(np.column_stack([psi / s, y])), psi.shape[0], output_scale(y))
 
 
 def _held_level(levels: np.ndarray, held: float) -> float:
@@ -452,8 +469,8 @@ def _static_part(d: _Data, points: StaticPoints) -> tuple[np.ndarray, np.ndarray
     M = len(points)
     n = A2.shape[1]
     if M > n:  # reduce as for Ψ so the QP never grows with N_SF either
-        Raug = _r_factor(np.column_stack([A2, points.ybar]))
-        return Raug[:n, :n], Raug[:n, n], M
+        R2, c2, _ = _r_factor_target(np.column_stack([A2, points.ybar]))
+        return R2, c2, M
     return A2, np.array(points.ybar), M
 
 
