@@ -158,3 +158,27 @@ def test_cls_and_pe_are_the_same_fit_on_signals_near_the_float_ranges_ends(ky, k
             far = fit(gb.Record(np.ldexp(u, ku), np.ldexp(y, ky)), _qp_points(ky, ku))
         for b, f in zip(base, far):
             np.testing.assert_allclose(f, _powers_of_two(b, _QP_TERMS, ky, ku), rtol=1e-9)
+
+
+@pytest.mark.parametrize("ky, ku", [(600, 0), (-700, 0), (0, -400), (600, 300)])
+def test_cls_with_static_information_is_the_same_fit_in_any_units(ky, ku):
+    # far from ordinary units the constraint rows left the float range: norms of points' rows overflowed (600), eq. (22)
+    # rows over column scales overflowed (u × 2^-400), and rows of a gain bound (y × 2^-700; y × 2^600 beside
+    # u × 2^300) or of a band (y × 2^-700) were read as zero rows: refused as infeasible, or dropped (the bound
+    # silently ignored: θ 14 % off)
+    u, y = _plant()
+    fits = [lambda r, p, ky, ku: gb.cls(_QP_TERMS, r, p, how="points"),
+            lambda r, p, ky, ku: gb.cls(_QP_TERMS, r, p, how="points", solver="closed"),
+            lambda r, p, ky, ku: gb.cls(_QP_TERMS, r, p, how="curve"),
+            lambda r, p, ky, ku: gb.cls(_QP_TERMS, r, p, how="context", constraints=gb.StaticBand(np.ldexp(0.01, ky))),
+            lambda r, p, ky, ku: gb.cls(_QP_TERMS, r, p, how="context",
+                                        constraints=gb.GainBounds(upper=np.ldexp(0.5, ky - ku)))]
+    for fit in fits:
+        base = fit(gb.Record(u, y), _qp_points(0, 0), 0, 0).model.theta
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            far = fit(gb.Record(np.ldexp(u, ku), np.ldexp(y, ky)), _qp_points(ky, ku), ky, ku).model.theta
+        # in the ordinary units (the constant's θ is round-off of 0 there)
+        np.testing.assert_allclose(_powers_of_two(far, _QP_TERMS, -ky, -ku), base, rtol=0,
+                                   atol=1e-13 * np.max(np.abs(base)))
+

@@ -21,7 +21,7 @@ from ._terms import Structure, Term
 __all__ = ["column_scales", "scaled_lstsq", "thread_pools", "one_blas_thread", "check_rows", "free_directions",
            "check_identified", "rank_tolerance", "HELD_OUTPUT", "CONSTANT_RTOL", "output_spread", "output_scale",
            "spread_scale", "beyond_float_range", "refuse_beyond_float_range", "binary_scaled", "unscaled_theta",
-           "unscaled_rss", "unscaled_levels", "scaled_norm"]
+           "unscaled_rss", "unscaled_levels", "scaled_norm", "scaled_norms"]
 
 _CONTROLLER: list[ThreadpoolController] = []
 
@@ -89,6 +89,17 @@ def scaled_norm(x: np.ndarray) -> float:
     e = int(np.frexp(m)[1])  # by a power of two, exact: in range, the very norm numpy takes of x (Table I's pins)
     with np.errstate(over="ignore"):
         return float(np.ldexp(np.linalg.norm(np.ldexp(x, -e)), e))
+
+
+def scaled_norms(A: np.ndarray, axis: int) -> np.ndarray:
+    """The Euclidean norms of A's columns (``axis=0``) or rows (``axis=1``), each computed as :func:`scaled_norm` over
+    the power of two above its largest |entry| (exact): rows of a static constraint in an output near 1e155 overflowed
+    in numpy's norm (their squares), near 1e-170 underflowed to 0 (a row read as no condition at all)."""
+    A = np.asarray(A, float)
+    m = np.max(np.abs(A), axis=axis, keepdims=True, initial=0.0)
+    e = np.where((m > 0) & np.isfinite(m), np.frexp(m)[1], 0)
+    with np.errstate(over="ignore"):
+        return np.ldexp(np.linalg.norm(np.ldexp(A, -e), axis=axis), np.squeeze(e, axis=axis))
 
 
 def output_spread(y: np.ndarray) -> float:

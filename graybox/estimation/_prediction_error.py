@@ -65,8 +65,9 @@ from ..static._curves import StaticCurve, fit_on_powers
 from ._extended_least_squares import els
 from ..static._surfaces import StaticSurface
 from ..static._form_check import varied_inputs
-from ..core._least_squares import (REMEDIES, beyond_float_range, check_identified, check_rows, column_scales,
-                                   free_directions, output_scale, rank_tolerance, spread_scale)
+from ..core._least_squares import (REMEDIES, check_identified, check_rows, column_scales, free_directions,
+                                   output_scale, rank_tolerance, beyond_float_range, scaled_norm, scaled_norms,
+                                   spread_scale)
 from ..models._coerce import as_model, as_structure, static_info, static_points
 from ..models._model import Model
 from ._pareto import ParetoSet
@@ -603,13 +604,16 @@ def _rows(cons: list[StaticConstraint], ctx: StaticContext, d: _Data, T: np.ndar
             user.append(c)
             continue
         if r.n_eq:
-            E.append(r.A_eq / s)
-            f.append(r.b_eq)
+            e = _row_exponents(r.A_eq, s)
+            E.append(np.ldexp(r.A_eq, -e) / s)
+            f.append(np.ldexp(r.b_eq, -e[:, 0]))
             eq_names.append(c.describe())
             eq_cons.append((c, r))
         if r.n_ub:
-            G.append((r.A_ub / s) if T is None else (r.A_ub / s) @ T)
-            h.append(r.b_ub - (r.A_ub / s) @ at)
+            e = _row_exponents(r.A_ub, s)
+            A_ub, b_ub = np.ldexp(r.A_ub, -e) / s, np.ldexp(r.b_ub, -e[:, 0])
+            G.append(A_ub if T is None else A_ub @ T)
+            h.append(b_ub - A_ub @ at)
     names = tuple(c.describe() for c in cons)
     E, f, G, h = np.vstack(E), np.concatenate(f), np.vstack(G), np.concatenate(h)
     G, h = _normalise_ub(G, h, names)
@@ -626,10 +630,22 @@ def _rows(cons: list[StaticConstraint], ctx: StaticContext, d: _Data, T: np.ndar
     return _Rows(V, g, G, h, tuple(user), names)
 
 
+def _row_exponents(A: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """Powers of two (shape (rows, 1)) that bring each constraint row of ``A`` (in θ) in z = s ⊙ θ, A / s, to about
+    unit size, exact: a row and its right-hand side over one power of two are the same condition, in any units. eq.
+    (22) at u about 1e-120 has rows of 1e240 beside column scales of 1e-121 (A / s overflowed); a gain bound at y
+    about 1e-211 rows of 1e-212 in z beside the denominator's rows of 1, read as zero rows and dropped (the bound
+    silently ignored), or refused as infeasible. A zero row stays zero (0 to the power 0)."""
+    low = np.iinfo(np.int32).min
+    top = np.where(A != 0, np.frexp(A)[1] - np.frexp(s)[1], low)
+    e = np.max(top, axis=1, keepdims=True, initial=low)
+    return np.where(e == low, 0, e)
+
+
 def _normalise_ub(G: np.ndarray, h: np.ndarray, names: tuple[str, ...], tol: float = 0.0
                   ) -> tuple[np.ndarray, np.ndarray]:
     """Rows of unit norm; a zero row dropped when it reads 0 <= h with h >= −``tol`` (else no θ meets it)."""
-    norms = np.linalg.norm(G, axis=1)
+    norms = scaled_norms(G, 1)
     zero = norms <= 1e-14 * max(1.0, norms.max(initial=0.0))
     if np.any(h[zero] < -tol):  # 0 <= h with h < 0: no θ can satisfy it
         raise InfeasibleError(f"infeasible constraints (a row reads 0 <= {h[zero].min():g}): {list(names)}")
@@ -687,9 +703,9 @@ def _centred_eq_rows(eq_cons: list[tuple[StaticConstraint, AffineRows]], ctx: St
 
 def _equilibrated(C: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Centred equality rows with columns, then rows, of unit norm (zero ones kept), and their right-hand sides."""
-    cn = np.linalg.norm(C, axis=0)
+    cn = scaled_norms(C, 0)
     C = C / np.where(cn > 0, cn, 1.0)
-    rn = np.linalg.norm(C, axis=1)
+    rn = scaled_norms(C, 1)
     rn = np.where(rn > 0, rn, 1.0)
     return C / rn[:, None], f / rn
 
@@ -701,7 +717,7 @@ def centred_eq_rank(cons: list[StaticConstraint], ctx: StaticContext) -> int | N
     centred = _centred_eq_rows(eq, ctx) if eq else None
     if centred is None:
         return None
-    C = centred[0][np.linalg.norm(centred[0], axis=1) > 0]
+    C = centred[0][scaled_norms(centred[0], 1) > 0]
     return _centred_rank(C, np.zeros(C.shape[0]), centred[2])[1]
 
 
@@ -726,7 +742,7 @@ def _reduce_eq(E: np.ndarray, f: np.ndarray, names: list[str], cluster_count: in
     n = E.shape[1]
     if E.shape[0] == 0:
         return np.zeros((0, n)), np.zeros(0)
-    norms = np.linalg.norm(E, axis=1)
+    norms = scaled_norms(E, 1)
     ok = norms > 0
     if np.any(np.abs(f[~ok]) > 0):
         raise InfeasibleError(f"inconsistent equality constraints (a row reads 0 = {f[~ok][0]:g}): {names}")
@@ -748,7 +764,7 @@ def _reduce_eq(E: np.ndarray, f: np.ndarray, names: list[str], cluster_count: in
             r = rc
             Ur, Uk = U[:, :r], Uc[:, :r]
             resid, judged = fc - Uk @ (Uk.T @ fc), fc
-    if np.linalg.norm(resid) > 1e-8 * max(scale, np.linalg.norm(judged)):
+    if scaled_norm(resid) > 1e-8 * max(scale, scaled_norm(judged)):
         more = ""
         if E.shape[0] > r and cluster_count is None:
             more = (f" ({E.shape[0]} equality rows but only {r} independent ones: some fix the same combination of "
@@ -888,11 +904,13 @@ class _QP:
             Qr, Rr = np.linalg.qr(d.R1 @ self.N)
             c = d.c1 - d.R1 @ self.z_p
             cq = Qr.T @ c
-            dr = _Data(d.structure, np.ones(k), Rr, cq, d.rss + float(np.sum((c - Qr @ cq) ** 2)), d.N, d.y_scale)
+            with np.errstate(over="ignore"):  # output units²: inf beyond the float range, as the data's rss
+                rss = d.rss + np.float64(scaled_norm(c - Qr @ cq)) ** 2
+            dr = _Data(d.structure, np.ones(k), Rr, cq, rss, d.N, d.y_scale)
             static_r = None if static is None else (static[0] @ self.N, static[1] - static[0] @ self.z_p)
             # a row the equalities leave constant is its slack at z_p, formed to the round-off of z_p's size (an
             # output offset 2e9 ± 50: Σyu <= 0 beside eq. (22)'s Σyu = 0 read 0 <= -1.1e-7 and was refused)
-            tol = 1e-9 * max(d.y_scale, float(np.linalg.norm(self.z_p)))
+            tol = 1e-9 * max(d.y_scale, scaled_norm(self.z_p))
             G, h = _normalise_ub(zrows.G @ self.N, zrows.h - zrows.G @ self.z_p, zrows.names, tol=tol)
             self.basis = b = _basis(dr, static_r, None, n_static)
             V, g = np.zeros((0, k)), np.zeros(0)
@@ -907,7 +925,7 @@ class _QP:
                 # round-off, not by a solver searching a feasible set of one point (a bound the point misses by
                 # 1e-12 ended in Clarabel's 'user_limit' and an overflow warning from cvxpy)
                 slack = zrows.h - zrows.G @ self.fixed
-                tol = 1e-9 * max(d.y_scale, float(np.linalg.norm(self.fixed)))
+                tol = 1e-9 * max(d.y_scale, scaled_norm(self.fixed))
                 if np.any(slack < -tol):
                     raise InfeasibleError(f"the constraints admit no θ: the equalities fix θ, and it misses "
                                           f"{list(zrows.names)} by {-slack.min():.3g} (output units)")
