@@ -377,3 +377,19 @@ def test_a_least_squares_start_beyond_the_float_range_is_refused_in_words():
     with pytest.raises(ValueError, match=r"\['u\(k-1\)\^2'\] are beyond the float range"):
         se_pareto(st, rec, gb.StaticPoints(1e-100 * np.array([-0.5, 0.0, 0.5]), 1e150 * np.ones(3)),
                   lambdas=[0.5], method="gradient")
+
+
+def test_a_least_squares_start_below_the_float_range_is_refused_in_words():
+    # u about 1e100 and y about 1e-150: u(k-1)²'s parameter, about 1e-351, is below the normal floats. It became 0
+    # without a word (θ [1.3e-151, 1.197, 2.4e-251, 0, -0.3996]: the term dropped, the others fitted without it), where
+    # the overflow side is refused (9210ff7c); cls did the same (its u(k-1)² θ 0), ELS refuses it by name
+    st = gb.Structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2", "y(k-2)"])
+    rng = np.random.default_rng(1)
+    u = rng.uniform(-1.0, 1.0, 60)
+    y = gb.Model(st, np.array([0.1, 1.2, 0.25, 0.1, -0.4])).simulate(u, np.zeros(2))
+    rec = gb.Record(1e100 * u, 1e-150 * y)
+    far = r"the parameter\(s\) of \['u\(k-1\)\^2'\] are beyond the float range.*rescale the signals"
+    with pytest.raises(ValueError, match="least squares: " + far):
+        output_error(st, rec, n_starts=1, margin=None)
+    with pytest.raises(ValueError, match=far):
+        gb.cls(st, rec)

@@ -20,7 +20,7 @@ from ._terms import Structure, Term
 
 __all__ = ["column_scales", "scaled_lstsq", "thread_pools", "one_blas_thread", "check_rows", "free_directions",
            "check_identified", "rank_tolerance", "HELD_OUTPUT", "CONSTANT_RTOL", "output_spread", "output_scale",
-           "spread_scale", "beyond_float_range", "refuse_beyond_float_range", "binary_scaled", "unscaled_theta",
+           "spread_scale", "beyond_float_range", "refuse_beyond_float_range", "refuse_parameter_scales", "binary_scaled", "unscaled_theta",
            "unscaled_rss", "unscaled_levels", "scaled_norm", "scaled_norms"]
 
 _CONTROLLER: list[ThreadpoolController] = []
@@ -196,6 +196,18 @@ def refuse_beyond_float_range(terms: Sequence, *thetas: np.ndarray, prefix: str 
     far = [str(t) for t, *vs in zip(terms, *thetas) if not all(np.isfinite(v) for v in vs)]
     if far:  # u(k-1)² of an input about 1e-160 is about 1e-320: its θ, about 1e320, is no float
         raise beyond_float_range(str(far), prefix)
+
+
+def refuse_parameter_scales(terms: Sequence, y_scale: float, scales: np.ndarray, prefix: str = "") -> None:
+    """:func:`beyond_float_range` naming the terms whose parameter's scale, the output's ``y_scale`` over the column's
+    RMS ``scales``, is no normal float: above the range (a column of 1e-320 beside an output of 1) or below it (u(k-1)²
+    of an input of 1e100 beside an output of 1e-150: a θ about 1e-351, which became 0 and dropped the term without a
+    word)."""
+    with np.errstate(over="ignore", under="ignore", divide="ignore"):
+        r = float(y_scale) / np.asarray(scales, float)
+    far = np.flatnonzero(~np.isfinite(r) | (r < np.finfo(float).tiny))
+    if far.size:
+        raise beyond_float_range(str([str(terms[j]) for j in far]), prefix)
 
 
 def rank_tolerance(largest: float, rows: int, n: int = 0) -> float:

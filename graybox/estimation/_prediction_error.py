@@ -66,7 +66,7 @@ from ._extended_least_squares import els
 from ..static._surfaces import StaticSurface
 from ..static._form_check import varied_inputs
 from ..core._least_squares import (REMEDIES, check_identified, check_rows, column_scales, free_directions,
-                                   output_scale, rank_tolerance, beyond_float_range, scaled_norm, scaled_norms,
+                                   output_scale, rank_tolerance, refuse_parameter_scales, scaled_norm, scaled_norms,
                                    spread_scale)
 from ..models._coerce import as_model, as_structure, static_info, static_points
 from ..models._model import Model
@@ -278,10 +278,8 @@ class _Data:
         # a parameter is of the order of the output's spread over its column's RMS: a column of 1e-320 (u(k-1)^2 of
         # an input of 1e-160) beside an output of 1 has a θ beyond the float range, and the QP's θ overflowed (numpy
         # warned, then "theta has non-finite values"); refused as scaled_lstsq refuses it
-        with np.errstate(over="ignore"):
-            far = np.flatnonzero(~np.isfinite(self.y_scale / self.s))
-        if far.size:
-            raise beyond_float_range(str([str(self.structure.terms[j]) for j in far]))
+        # (and below: a θ under the normal floats was 0 or a subnormal of a few bits, the term dropped silently)
+        refuse_parameter_scales(self.structure.terms, self.y_scale, self.s)
 
     def theta(self, z: np.ndarray) -> np.ndarray:
         """θ (engineering units, on the signals as given) of z, shape (n,) or (K, n)."""

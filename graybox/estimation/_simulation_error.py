@@ -67,7 +67,7 @@ from ..core._simulation_kernels import (
     simulate_one,
 )
 from ..core._least_squares import (check_rows, column_scales, one_blas_thread, output_scale, refuse_beyond_float_range,
-                                     scaled_lstsq)
+                                     refuse_parameter_scales, scaled_lstsq)
 from ..models._coerce import as_structure, records_of, static_points
 from ._pareto import ParetoSet
 from ..core._progress import progress_bar
@@ -622,6 +622,8 @@ class SEProblem:
         records' regression and the static rows Q R θ = ȳ of eq. (12), each as a mean square (PE's closed
         form at λ1 = 1/2); neither: ``ValueError`` saying what is missing."""
         if "ls" not in self._memo:
+            # a θ below the normal floats in these units (u(k-1)² of u ≈ 1e100, y ≈ 1e-150) became 0 silently
+            refuse_parameter_scales(self.structure.terms, self.y_scale, self.scale, prefix="least squares: ")
             if self.records_identify() and self.z_map is not None:
                 with np.errstate(over="ignore"):  # a θ beyond the float range (u(k-1)² of u ≈ 1e-100, y ≈ 1e150)
                     th = self.from_z(self.ls_z())
