@@ -182,3 +182,28 @@ def test_cls_with_static_information_is_the_same_fit_in_any_units(ky, ku):
         np.testing.assert_allclose(_powers_of_two(far, _QP_TERMS, -ky, -ku), base, rtol=0,
                                    atol=1e-13 * np.max(np.abs(base)))
 
+
+def test_frols_and_semp_refuse_a_chosen_term_whose_column_is_no_float_in_the_users_units():
+    # y × 2^600: y(k-1)² is about 2^1200 in the user's units. Chosen on the scaled signals it was returned with a θ
+    # of 1e-182, and the model's one-step predictions were NaN; els refuses that structure: the same words now
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(0.5, 2.0, 31), 10)[:300]
+    y = np.zeros(300)
+    for k in range(1, 300):
+        y[k] = 0.5 * y[k - 1] + 0.1 * y[k - 1] ** 2 + 0.3 * u[k - 1] + 0.001 * rng.standard_normal()
+    rec = gb.Record(u, np.ldexp(y, 600))
+    cand = gb.Candidates(2, 2, degree=2)
+    said = r"regressors overflow to non-finite values on these data \(e.g. y\(k-[12]\)\^2\).*rescale the signals"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ValueError, match=said):
+            gb.els(["y(k-1)", "y(k-1)^2", "u(k-1)"], rec, noise=0)
+        for centre in (False, True):
+            with pytest.raises(ValueError, match=said):
+                gb.frols(cand, rec, n_terms=3, include=["y(k-1)^2"], centre=centre)
+            with pytest.raises(ValueError, match=said):
+                gb.semp(cand, rec, n_terms=3, include=["y(k-1)^2"], centre=centre)
+        # a structure whose columns are floats is chosen and fitted as in ordinary units
+        base, far = gb.frols(cand, gb.Record(u, y), n_terms=3), gb.frols(cand, rec, n_terms=3)
+        assert list(far.structure) == list(base.structure) and "y(k-1)^2" not in [str(t) for t in far.structure]
+        assert np.array_equal(far.theta, _powers_of_two(base.theta, base.structure, 600, 0))

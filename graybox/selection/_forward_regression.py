@@ -72,7 +72,7 @@ from ..core._gram import (
 )
 from ..core._least_squares import (binary_scaled, one_blas_thread, refuse_beyond_float_range, unscaled_levels,
                                    unscaled_rss, unscaled_theta)
-from ..core._regressors import check_structure_inputs, record_signals
+from ..core._regressors import check_structure_inputs, record_signals, stacked_regressors
 from ..core._validation import (Relocked, as_1d_finite, check_bool, check_choice, check_fields, check_int,
                                 check_mean_square, check_real, check_theta, locked, warn)
 from ._stopping import choose_model, stop_rule, FewerTermsError, StopRule
@@ -812,6 +812,9 @@ def frols(
     with np.errstate(over="ignore"):  # a column of 1e-320 beside an output of 1: a θ of 1e320, refused below
         theta = unscaled_theta(theta_scaled / cols.scales[idx], [process[j] for j in idx], exps)
     refuse_beyond_float_range([process[j] for j in idx], theta, prefix="frols: ")
+    if exps:  # chosen on the scaled signals, a term whose column is no float in the data's own units is refused as
+        # els refuses it (y × 2^600 with y(k-1)²: the model's one-step predictions were NaN)
+        stacked_regressors(Structure([process[j] for j in idx]), given)
     evaluated = Structure([process[j] for j in chosen])
     return Selection(
         structure=evaluated[:n_sel],
@@ -884,7 +887,8 @@ def _frols_centred(candidates: Structure, data: object, **options) -> Selection:
     stop = _centring.stop_note(sel.stop, len(sel.structure), len(full), unscaled_levels(offsets, exps), dropped)
     theta = unscaled_theta(_centring.raw_theta(closed, fit.theta, offsets), list(closed), exps)
     refuse_beyond_float_range(list(closed), theta, prefix="frols: ")
-    if exps:  # RSS and the criterion curve in the data's own units (the fit's rows: L on, of each record)
+    if exps:
+        stacked_regressors(Structure(list(closed)), given)  # a column beyond the float range in the data's units  # RSS and the criterion curve in the data's own units (the fit's rows: L on, of each record)
         n_rows = sum(len(r.y) - L for r in as_gram_records(data))
         fit = replace(fit, rss=unscaled_rss(fit.rss, exps),
                       criterion_curve=_unscaled_curve(fit.criterion, fit.rss, n_rows, exps.get("y", 0)))

@@ -41,7 +41,7 @@ import scipy.linalg
 from ..core._gram import triangular_factor
 from ..core._least_squares import (binary_scaled, column_scales, one_blas_thread, output_scale,
                                    refuse_beyond_float_range, unscaled_levels, unscaled_theta)
-from ..core._regressors import refuse_non_finite_columns
+from ..core._regressors import refuse_non_finite_columns, stacked_regressors
 from ..core._simulation_kernels import batch_sse, encode, input_products, record_inputs
 from ..models._model import Model, model_input_names
 from ..core._records import Dataset, Record, as_records, carried_from, check_units, require_lengths
@@ -346,7 +346,7 @@ def semp(
                              include=include, prune=prune, prune_tol=prune_tol, rank_tol=rank_tol, threads=threads)
     # y and the inputs times a power of two where their products would leave the float range (as frols does): the
     # same search bit for bit, where y near 1e-200 underflowed the free-run errors' squares (ln 0 in the criterion)
-    data, exps = binary_scaled(data, opt.process)
+    given, (data, exps) = data, binary_scaled(data, opt.process)
     # one BLAS thread: the factor of [S, y] and each step's small QRs gain nothing from more, and on a loaded
     # machine lose much (the plant's semp(n_terms=10): 7.2 s on two threads, 3.4 s on one)
     with one_blas_thread():
@@ -370,10 +370,10 @@ def semp(
                              "included terms")
         run = _Search(sc, opt)
         stop, capped = _grow(run)
-        return _unscaled(_result(run, stop, capped), exps)
+        return _unscaled(_result(run, stop, capped), exps, given)
 
 
-def _unscaled(res: SEMPResult, exps: dict[str, int]) -> SEMPResult:
+def _unscaled(res: SEMPResult, exps: dict[str, int], given: object) -> SEMPResult:
     """A search's result on the signals times 2^-e (:func:`~graybox.core._least_squares.binary_scaled`) in the data's
     own units: θ; the free-run MSEs (output units², 0 or inf where they leave the float range, as y² there); the
     criterion, N ln of the MSE, plus N ln 4^e."""
@@ -388,13 +388,16 @@ def _unscaled(res: SEMPResult, exps: dict[str, int]) -> SEMPResult:
         score = float(np.ldexp(res.score, 2 * ey))
     theta = unscaled_theta(res.theta, list(res.structure), exps)
     refuse_beyond_float_range(res.structure, theta, prefix="semp: the structure chosen cannot be used on these data: ")
+    # and a term whose column is no float in the data's own units, as els refuses it (y × 2^600 with y(k-2)²: the
+    # model's one-step predictions were NaN)
+    stacked_regressors(res.structure, given)
     return replace(res, theta=frozen(theta), score=score, path=path, forward_scores=fwd)
 
 
 def _semp_centred(candidates: Structure, data: Record | Sequence[Record] | Dataset, **options) -> SEMPResult:
     """semp(centre=True): search on the centred signals, close the choice under shifts, refit (see semp)."""
     # the whole of it on the signals times a power of two where they come near the float range's ends (as semp)
-    data, exps = binary_scaled(data, candidates.process)
+    given, (data, exps) = data, binary_scaled(data, candidates.process)
     offsets = _centring.search_offsets(data)
     centred = _centring.centred_data(data, offsets)
     _centring.check_included(options["include"], candidates.process, data)
@@ -422,7 +425,7 @@ def _semp_centred(candidates: Structure, data: Record | Sequence[Record] | Datas
     # the offsets in the data's own units (those of the signals times 2^-e said 'y − 0.436' of a mean of 3.6e180)
     stop = _centring.stop_note(res.stop, len(res.structure), len(full), unscaled_levels(offsets, exps), dropped)
     return _unscaled(replace(res, structure=closed, theta=frozen(_centring.raw_theta(closed, theta, offsets)),
-                             score=score, stop=stop), exps)
+                             score=score, stop=stop), exps, given)
 
 
 # --------------------------------------------------------------------------------------
