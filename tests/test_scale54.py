@@ -207,3 +207,18 @@ def test_frols_and_semp_refuse_a_chosen_term_whose_column_is_no_float_in_the_use
         base, far = gb.frols(cand, gb.Record(u, y), n_terms=3), gb.frols(cand, rec, n_terms=3)
         assert list(far.structure) == list(base.structure) and "y(k-1)^2" not in [str(t) for t in far.structure]
         assert np.array_equal(far.theta, _powers_of_two(base.theta, base.structure, 600, 0))
+
+
+def test_pe_pareto_runs_on_an_output_near_the_float_ranges_end():
+    # y × 2^600: the members' static errors J_SF^QR squared errors of about 2^600 ('overflow encountered in square', an
+    # error under warnings-as-errors); now each mean square is taken over a power of two: inf where it is no float in
+    # output units² (as y² there), the members' θ those of ordinary units
+    u, y = _plant()
+    base = gb.pe_pareto(_QP_TERMS, gb.Record(u, y), _qp_points(0, 0), lambdas=[1.0, 0.5])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        far = gb.pe_pareto(_QP_TERMS, gb.Record(u, np.ldexp(y, 600)), _qp_points(600, 0), lambdas=[1.0, 0.5])
+    for b, f in zip(base.thetas, far.thetas):
+        np.testing.assert_allclose(_powers_of_two(f, _QP_TERMS, -600, 0), b, rtol=0,
+                                   atol=1e-13 * np.max(np.abs(b)))
+    assert np.all(np.isinf(far.extra["JSF_QR"]))

@@ -21,7 +21,7 @@ from ._terms import Structure, Term
 __all__ = ["column_scales", "scaled_lstsq", "thread_pools", "one_blas_thread", "check_rows", "free_directions",
            "check_identified", "rank_tolerance", "HELD_OUTPUT", "CONSTANT_RTOL", "output_spread", "output_scale",
            "spread_scale", "beyond_float_range", "refuse_beyond_float_range", "refuse_parameter_scales", "binary_scaled", "unscaled_theta",
-           "unscaled_rss", "unscaled_levels", "scaled_norm", "scaled_norms"]
+           "unscaled_rss", "unscaled_levels", "scaled_norm", "scaled_norms", "mean_square"]
 
 _CONTROLLER: list[ThreadpoolController] = []
 
@@ -100,6 +100,17 @@ def scaled_norms(A: np.ndarray, axis: int) -> np.ndarray:
     e = np.where((m > 0) & np.isfinite(m), np.frexp(m)[1], 0)
     with np.errstate(over="ignore"):
         return np.ldexp(np.linalg.norm(np.ldexp(A, -e), axis=axis), np.squeeze(e, axis=axis))
+
+
+def mean_square(x: np.ndarray, axis: int = -1) -> np.ndarray:
+    """mean(x²) along ``axis`` (units²), each computed over the power of two above its largest |x| and mapped back
+    (exact): inf or 0 only where the mean square itself leaves the float range, as y² there (errors about 1e160 warned
+    'overflow encountered in square', an error under warnings-as-errors)."""
+    x = np.asarray(x, float)
+    m = np.max(np.abs(x), axis=axis, keepdims=True, initial=0.0)
+    e = np.where((m > 0) & np.isfinite(m), np.frexp(m)[1], 0)
+    with np.errstate(over="ignore", under="ignore"):
+        return np.ldexp(np.mean(np.ldexp(x, -e) ** 2, axis=axis), 2 * np.squeeze(e, axis=axis))
 
 
 def output_spread(y: np.ndarray) -> float:

@@ -66,7 +66,7 @@ from ._extended_least_squares import els
 from ..static._surfaces import StaticSurface
 from ..static._form_check import varied_inputs
 from ..core._least_squares import (REMEDIES, check_identified, check_rows, column_scales, free_directions,
-                                   output_scale, rank_tolerance, refuse_parameter_scales, scaled_norm, scaled_norms,
+                                   mean_square, output_scale, rank_tolerance, refuse_parameter_scales, scaled_norm, scaled_norms,
                                    spread_scale)
 from ..models._coerce import as_model, as_structure, static_info, static_points
 from ..models._model import Model
@@ -202,7 +202,7 @@ def qr_static_error(structure: Structure, thetas: np.ndarray, points: StaticPoin
     ndarray, shape (K,) (a float for one θ).
     """
     pred = static_prediction(structure, thetas, points)
-    return np.mean((pred - points.ybar) ** 2, axis=-1)
+    return mean_square(pred - points.ybar, axis=-1)
 
 
 @dataclass(frozen=True, eq=False)
