@@ -222,3 +222,19 @@ def test_pe_pareto_runs_on_an_output_near_the_float_ranges_end():
         np.testing.assert_allclose(_powers_of_two(f, _QP_TERMS, -600, 0), b, rtol=0,
                                    atol=1e-13 * np.max(np.abs(b)))
     assert np.all(np.isinf(far.extra["JSF_QR"]))
+
+
+@pytest.mark.parametrize("ky, ku", [(515, 0), (600, 300)])
+def test_cls_on_a_dask_record_is_the_same_fit_near_the_float_ranges_ends(ky, ku):
+    # the chunked reduction squared the output (its RSS, c[n]² of 2^515: 'overflow encountered in scalar power') and
+    # the factor's columns (their RMS) and took the targets' mean square: as the in-memory records now, θ to round-off
+    import dask.array as da
+
+    u, y = _plant()
+    base = gb.cls(_QP_TERMS, gb.Record(u, y)).model.theta
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        rec = gb.DaskRecord(da.from_array(np.ldexp(u, ku), chunks=100), da.from_array(np.ldexp(y, ky), chunks=100))
+        far = gb.cls(_QP_TERMS, rec).model.theta
+    np.testing.assert_allclose(_powers_of_two(far, _QP_TERMS, -ky, -ku), base, rtol=0,
+                               atol=1e-13 * np.max(np.abs(base)))

@@ -34,6 +34,7 @@ sweep compiles once and re-solves (OSQP warm-started from the neighbouring λ).
 
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Iterable, Mapping, Sequence
@@ -437,25 +438,32 @@ def _dynamic_chunked(structure: Structure, records: list) -> _Data:
     R, N = r_factor(structure.terms, records, structure.max_lag)
     check_rows(N, n)
     # column RMS from the factor (‖A e_j‖ = ‖R e_j‖); R D⁻¹ is the factor of the scaled matrix
-    s = np.sqrt(np.einsum("ij,ij->j", R[:, :n], R[:, :n]) / N)
+    # (norms over a power of two: a column about 2^515, y(k-1) of such an output, overflowed in its square)
+    s = scaled_norms(R[:, :n], 0) / np.sqrt(N)
     s = np.where(s > 0, s, 1.0)
     Rs = R[:, :n] / s
     # QR sign convention: make the diagonal positive, as the Cholesky-based factor has it
     sign = np.where(np.diag(R) < 0, -1.0, 1.0)[:, None]
     Rs, c = sign * Rs, sign[:, 0] * R[:, n]
-    return _Data(structure, s, Rs[:n, :n], c[:n], float(c[n] ** 2), N, _target_scale(records, structure.max_lag))
+    with np.errstate(over="ignore", under="ignore"):  # output units²: inf or 0 beyond the float range, as y² there
+        rss = float(np.float64(c[n]) ** 2)
+    # ‖y‖ is the norm of R's last column: the targets' RMS, to scale them by before their squares are taken
+    rms = scaled_norm(R[:, n]) / np.sqrt(N)
+    return _Data(structure, s, Rs[:n, :n], c[:n], rss, N, _target_scale(records, structure.max_lag, rms))
 
 
-def _target_scale(records: list, L: int) -> float:
-    """output_scale of the regression targets y[L:] of every record, on the Dask scheduler for Dask records."""
+def _target_scale(records: list, L: int, rms: float = 1.0) -> float:
+    """output_scale of the regression targets y[L:] of every record, on the Dask scheduler for Dask records (their
+    RMS ``rms`` known, output units: they are taken over the power of two above it, whose squares stay floats)."""
     if not is_dask_data(records):
         return output_scale(np.concatenate([np.asarray(r.y[L:], float) for r in as_records(records)]))
     import dask
     import dask.array as da
 
-    y = da.concatenate([r.y[L:] for r in records])
+    e = int(np.frexp(rms)[1]) if 0.0 < rms < np.inf else 0
+    y = da.concatenate([r.y[L:] for r in records]) * math.ldexp(1.0, -e)
     std, ms = dask.compute(da.std(y), da.mean(y**2))
-    return spread_scale(float(std), float(np.sqrt(ms)))
+    return math.ldexp(spread_scale(float(std), float(np.sqrt(ms))), e)
 
 
 def _static_part(d: _Data, points: StaticPoints) -> tuple[np.ndarray, np.ndarray, int]:
