@@ -238,3 +238,21 @@ def test_cls_on_a_dask_record_is_the_same_fit_near_the_float_ranges_ends(ky, ku)
         far = gb.cls(_QP_TERMS, rec).model.theta
     np.testing.assert_allclose(_powers_of_two(far, _QP_TERMS, -ky, -ku), base, rtol=0,
                                atol=1e-13 * np.max(np.abs(base)))
+
+
+def test_uncertainty_refuses_a_variance_beyond_the_float_range_in_the_users_units():
+    # y × 2^-700: σ² (output units², about 2^-1400) underflowed to 0, and cls_uncertainty returned a covariance of 0
+    # (every parameter known exactly, from noisy data) without a word; so did ls_uncertainty
+    u, y = _plant()
+    rec, pts = gb.Record(u, np.ldexp(y, -700)), _qp_points(-700, 0)
+    said = (r"the noise variance σ² and the covariance are in output units².*beyond the float range in these units: "
+            "rescale the signals")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ValueError, match="^cls_uncertainty: " + said):
+            gb.cls_uncertainty(gb.cls(_QP_TERMS, rec, pts, how="points").model, rec, pts, how="points")
+        with pytest.raises(ValueError, match="ls_uncertainty: " + said):
+            gb.ls_uncertainty(gb.els(_QP_TERMS, rec, noise=0).model, rec)
+        member = gb.pe_pareto(_QP_TERMS, rec, pts, lambdas=[0.5]).models()[0]
+        with pytest.raises(ValueError, match="pe_uncertainty: " + said):
+            gb.pe_uncertainty(member, rec, pts, lambda1=0.5)

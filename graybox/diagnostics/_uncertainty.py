@@ -516,6 +516,18 @@ def _sandwich(Z: np.ndarray, A: np.ndarray, G: np.ndarray, what: str, rows: int)
         return W.T @ W, (np.linalg.qr(GZV, mode="r") / S**2) @ ZV.T
 
 
+def _check_variance_units(y_scale: float, what: str) -> None:
+    """``ValueError`` where the output's spread squared (output units², the units of σ² and of the output's terms'
+    variances) is no normal float: at y about 1e-211 σ² underflowed to 0 and the covariance returned was 0 (every
+    parameter known exactly, said of noisy data), at y about 1e180 it overflowed."""
+    with np.errstate(over="ignore", under="ignore"):
+        sq = float(np.float64(y_scale) ** 2)
+    if not np.finfo(float).tiny <= sq < np.inf:
+        raise ValueError(f"{what}: the noise variance σ² and the covariance are in output units², and the output's "
+                         f"spread ({y_scale:.3g}) squared is beyond the float range in these units: rescale the "
+                         "signals (other units) and estimate again")
+
+
 def _to_theta(cov_z: tuple[np.ndarray, np.ndarray], s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Covariance and its factor in z = s ⊙ θ → in θ."""
     return cov_z[0] / np.outer(s, s), cov_z[1] / s
@@ -764,6 +776,7 @@ def _ls_uncertainty(model: Model, recs: list[Record], level: float) -> Parameter
     # on the raw ones y(k-1)^2 at y + 2^20 was refused as "not identifiable", and 6e-5 off at y + 2^18
     d = _data(st, recs)
     check_rows(d.N, n, f"{what}: ")
+    _check_variance_units(d.y_scale, what)
     fc = _FitCoordinates(d, [], None, model.theta)
     z = fc.theta * d.s
     dof = d.N - n
@@ -950,6 +963,7 @@ def cls_uncertainty(
     cons, ctx, _ = _cls_setup(st, recs, d, data, static, how, reference, constraints)
     if d.A is not None and not centrable(cons):
         d = _dynamic(st, recs)
+    _check_variance_units(d.y_scale, "cls_uncertainty")
     fc = _FitCoordinates(d, cons, ctx, model.theta)
     A = _equalities(cons, fc.ctx, fc.theta, d.s, "cls_uncertainty", d.R1, d.N, d.y_scale, fc.affine, fc.round)
     n = len(st)
@@ -1034,6 +1048,7 @@ def pe_uncertainty(
         st, recs, d, pts, ctx, cons, rows, stat, M = _pe_setup(m, data, static, constraints, weights, ubar, reference,
                                                                centre=True)
     n = len(st)
+    _check_variance_units(d.y_scale, "pe_uncertainty")
     fc = _FitCoordinates(d, cons, ctx, m.theta)
     theta, pts = fc.theta, fc.points(pts)
     cm = static_cluster_map(st, recs[0].input_names)  # a surface's clusters for several inputs
