@@ -20,8 +20,9 @@ from ._terms import Structure, Term
 
 __all__ = ["column_scales", "scaled_lstsq", "thread_pools", "one_blas_thread", "check_rows", "free_directions",
            "check_identified", "rank_tolerance", "HELD_OUTPUT", "CONSTANT_RTOL", "output_spread", "output_scale",
-           "spread_scale", "beyond_float_range", "refuse_beyond_float_range", "refuse_parameter_scales", "binary_scaled", "unscaled_theta",
-           "unscaled_rss", "unscaled_levels", "scaled_norm", "scaled_norms", "mean_square"]
+           "spread_scale", "beyond_float_range", "refuse_beyond_float_range", "refuse_parameter_scales",
+           "binary_scaled", "unscaled_theta", "unscaled_rss", "unscaled_levels", "scaled_norm", "scaled_norms",
+           "mean_square"]
 
 _CONTROLLER: list[ThreadpoolController] = []
 

@@ -67,8 +67,8 @@ from ._extended_least_squares import els
 from ..static._surfaces import StaticSurface
 from ..static._form_check import varied_inputs
 from ..core._least_squares import (REMEDIES, check_identified, check_rows, column_scales, free_directions,
-                                   mean_square, output_scale, rank_tolerance, refuse_parameter_scales, scaled_norm, scaled_norms,
-                                   spread_scale)
+                                   mean_square, output_scale, rank_tolerance, refuse_parameter_scales, scaled_norm,
+                                   scaled_norms, spread_scale)
 from ..models._coerce import as_model, as_structure, static_info, static_points
 from ..models._model import Model
 from ._pareto import ParetoSet

@@ -888,7 +888,8 @@ def _frols_centred(candidates: Structure, data: object, **options) -> Selection:
     theta = unscaled_theta(_centring.raw_theta(closed, fit.theta, offsets), list(closed), exps)
     refuse_beyond_float_range(list(closed), theta, prefix="frols: ")
     if exps:
-        stacked_regressors(Structure(list(closed)), given)  # a column beyond the float range in the data's units  # RSS and the criterion curve in the data's own units (the fit's rows: L on, of each record)
+        stacked_regressors(Structure(list(closed)), given)  # a column beyond the float range in the data's units
+        # RSS and the criterion curve in the data's own units (the fit's rows: L on, of each record)
         n_rows = sum(len(r.y) - L for r in as_gram_records(data))
         fit = replace(fit, rss=unscaled_rss(fit.rss, exps),
                       criterion_curve=_unscaled_curve(fit.criterion, fit.rss, n_rows, exps.get("y", 0)))
