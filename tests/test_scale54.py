@@ -256,3 +256,42 @@ def test_uncertainty_refuses_a_variance_beyond_the_float_range_in_the_users_unit
         member = gb.pe_pareto(_QP_TERMS, rec, pts, lambdas=[0.5]).models()[0]
         with pytest.raises(ValueError, match="pe_uncertainty: " + said):
             gb.pe_uncertainty(member, rec, pts, lambda1=0.5)
+_POINTS_U = np.array([[0.6, -0.5], [1.0, 0.2], [1.5, 0.7], [1.9, -0.1], [1.2, 0.9], [0.8, 0.0], [1.7, 0.4]])
+_POINTS_Y = 48.0 + (0.2 * _POINTS_U[:, 0] + 0.05 * _POINTS_U[:, 0] ** 2) / 0.4
+
+
+@pytest.mark.parametrize("ky, ku", [(600, 0), (515, 0), (-700, 3), (2, -500)])
+def test_cls_and_pe_are_the_same_fit_bit_for_bit_on_signals_scaled_by_powers_of_two(ky, ku):
+    # the law ELS and frols hold, for the QP paths (cvxpy, the closed form): the same θ to the last bit. column_scales
+    # took a far column's RMS (y(k-1) of y × 2^600, whose square overflows) over its largest |value| and as a lone
+    # column, another rounding than the plain RMS of the same column in ordinary units: θ moved by ~1e-15; two
+    # records, two inputs, an offset
+    terms = ["1", "y(k-1)", "a(k-1)", "a(k-1)^2", "b(k-1)", "y(k-1)b(k-1)"]
+
+    def fits(ky, ku):
+        recs = _two_input_records(ky, ku)
+        pts = gb.StaticPoints(np.ldexp(_POINTS_U, ku), np.ldexp(_POINTS_Y, ky), input_names=("a", "b"))
+        pe = gb.pe_pareto(terms, recs, pts, lambdas=[1e-3, 0.5, 1.0])
+        two = gb.StaticPoints(pts.ubar[:2], pts.ybar[:2], input_names=("a", "b"))
+        return [gb.cls(terms, recs, two, how="points").model.theta, pe.thetas,
+                gb.pe_thetas(terms, recs, pts, lambdas=[1e-3, 0.5, 1.0], solver="closed")], pe.extra["JSF_QR"]
+
+    (base, base_qr), (far, far_qr) = fits(0, 0), (None, None)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        far, far_qr = fits(ky, ku)
+    for b, f in zip(base, far):
+        want = np.array([_powers_of_two(t, terms, ky, ku) for t in np.atleast_2d(b)]).reshape(b.shape)
+        assert np.array_equal(f, want)
+    with np.errstate(over="ignore"):  # J_SF^QR in output units²: inf where it is beyond the float range, as y² there
+        np.testing.assert_array_equal(far_qr, np.ldexp(base_qr, 2 * ky))
+
+
+def test_cls_refuses_a_parameter_below_the_float_range_naming_the_term():
+    # u × 2^300 beside y × 2^-600: u(k-1)²'s θ is about 2^-1200, no float; cls warned 'invalid value encountered in
+    # divide' (an error here) where ELS names the term
+    u, y = _plant()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ValueError, match=r"the parameter\(s\) of \['u\(k-1\)\^2'\] are beyond the float range"):
+            gb.cls(TERMS, gb.Record(np.ldexp(u, 300), np.ldexp(y, -600)))

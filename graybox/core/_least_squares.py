@@ -67,9 +67,15 @@ def column_scales(A: np.ndarray) -> np.ndarray:
         B = A[:, far]
         keep = np.all(np.isfinite(B), axis=0) & np.any(B, axis=0)  # not a NaN's or an all-zero column
         far, B = far[keep], B[:, keep]
-        m = np.max(np.abs(B), axis=0)
+        # over the power of two above the largest |value| (exact), and reduced over A's own shape (numpy sums a lone
+        # column in another order): the RMS of a column times 2^k is 2^k times its RMS to the bit, as the plain RMS
+        # is where it stays in range (over m itself, and as a lone column, it was rounded otherwise)
+        e = np.zeros(A.shape[1], dtype=int)
+        e[far] = np.frexp(np.max(np.abs(B), axis=0))[1]
+        with np.errstate(over="ignore", under="ignore"):  # the other columns' squares are not read
+            ms = np.mean(np.ldexp(A, -e) ** 2, axis=0)
         s = np.array(s, dtype=float, ndmin=1)
-        s[far] = m * np.sqrt(np.mean((B / m) ** 2, axis=0))
+        s[far] = np.ldexp(np.sqrt(ms[far]), e[far])
     return np.where(s > 0, s, 1.0)
 
 
