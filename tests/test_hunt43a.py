@@ -1,6 +1,7 @@
 """Bug hunt 43a: reports that explain, and the plots."""
 
 import re
+import shutil
 import warnings
 
 import numpy as np
@@ -72,6 +73,14 @@ def two_data(tmp_path_factory):
     return path, d.static.band
 
 
+@pytest.fixture(scope="module")
+def band_report(two_data, tmp_path_factory):
+    """The report of ``two_data`` with bare's band given (B = 0.05), html too: its folder and the files written
+    (written once: two tests read it, one a copy; every report's figures cost seconds)."""
+    out = tmp_path_factory.mktemp("band") / "report"
+    return out, gx.write_report(two_data[0], out, band={"bare": 0.05}, html=True)
+
+
 def test_a_band_mapping_leaves_the_data_sets_it_does_not_name_to_their_stored_band(two_data):
     """leaderboard's band: 'default: each data set's band as stored'. A mapping giving the band of the data set that
     stores none raised 'band gives no value for data set pumping', though pumping stores its own: a store of such
@@ -134,17 +143,17 @@ def test_grid_report_takes_a_band_per_data_set(two_data, tmp_path, capsys):
         assert said in capsys.readouterr().err
 
 
-def test_a_report_rewritten_in_its_folder_leaves_no_file_of_the_last_one(two_data, tmp_path):
+def test_a_report_rewritten_in_its_folder_leaves_no_file_of_the_last_one(band_report, tmp_path):
     """A report written again into its folder overwrote the files it wrote and kept the others: the figures of a data
     set the new report does not hold, and a report.html (of the old leaderboard) when the new one was written without
     html, sat beside the new tables as if they were of them. A file the reports did not write stays."""
-    path, _ = two_data
     one = gx.Grid([gx.DataSpec("pumping", bundled="pumping")], [gx.StructureSpec("fo", terms=["y(k-1)", "u(k-1)"])],
                   [gx.Variant("LS", "ls")], name="one")
     small = tmp_path / "one.sqlite"
     gx.run_grid(one, small, progress=False)
-    out = tmp_path / "report"
-    first = gx.write_report(path, out, band={"bare": 0.05}, html=True)
+    src, written = band_report
+    out = shutil.copytree(src, tmp_path / "report")  # the last report's folder, its manifest too
+    first = [out / p.relative_to(src) for p in written]
     assert (out / "heatmap_bare.png") in first and (out / "report.html") in first
     (out / "notes.txt").write_text("mine")
     second = gx.write_report(small, out)
@@ -466,13 +475,12 @@ def test_the_heat_map_tells_a_pair_never_run_from_one_with_no_qualifying_model(t
     assert texts[(rows.index("so"), cols.index("LS"))] == "—"  # run: no model in the band
 
 
-def test_the_summary_says_which_band_ranked_each_data_set(two_data, tmp_path):
+def test_the_summary_says_which_band_ranked_each_data_set(two_data, band_report, tmp_path):
     """summary.txt (and report.html) said 'ranking rule: dsf_valid' and '<data>: best by J_S on the validation
     record', never within which band: a report made with --band, or of a data set whose band the spec gave, ranked by
     a B the reader could find only in the reasons of rows that missed it."""
     path, b = two_data
-    gx.write_report(path, tmp_path / "r", band={"bare": 0.05}, html=True)
-    text = (tmp_path / "r" / "summary.txt").read_text()
+    text = (band_report[0] / "summary.txt").read_text()  # write_report(path, ..., band={"bare": 0.05}, html=True)
     assert f"pumping: best by J_S on the validation record among the models with J_SF ≤ B = {b:g}" in text
     assert "bare: best by J_S on the validation record among the models with J_SF ≤ B = 0.05" in text
     gx.write_report(path, tmp_path / "c", rule="chosen")
