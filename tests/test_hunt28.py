@@ -66,13 +66,21 @@ def test_a_neural_model_refuses_several_inputs_clearly():
             call()
 
 
-def _cli(*argv: str, cwd=None):
-    """``python -m graybox ARGV`` as a user runs it: (exit status, stdout, stderr)."""
-    import subprocess
-    import sys
+def _cli(*argv: str):
+    """The graybox command on ARGV, its main in this process: (exit status, stdout, stderr). (`python -m graybox`
+    in a new process cost a second or two of imports a call; the pipe test below, which needs one, starts one.)"""
+    import contextlib
+    import io
 
-    p = subprocess.run([sys.executable, "-m", "graybox", *argv], capture_output=True, text=True, cwd=cwd, timeout=300)
-    return p.returncode, p.stdout, p.stderr
+    from graybox._cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code = main(list(argv))
+        except SystemExit as exc:  # argparse's refusals, as the process would exit
+            code = exc.code
+    return code, out.getvalue(), err.getvalue()
 
 
 def test_reproduce_refuses_an_out_that_is_not_a_folder_in_one_line(tmp_path):
