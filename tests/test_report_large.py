@@ -59,7 +59,8 @@ def test_the_cli_takes_max_structures(store, tmp_path, capsys):
     # the command's main in this process (two `python -m graybox` runs cost 2 s of imports; test_cli_help runs it so)
     from graybox._cli import main
 
-    assert main(["grid", "report", str(store), "--out", str(tmp_path), "--rule", "chosen", "--max-structures", "3"]) == 0
+    argv = ["grid", "report", str(store), "--out", str(tmp_path), "--rule", "chosen", "--max-structures", "3"]
+    assert main(argv) == 0
     assert "the figures draw the 3 best of 5 structures" in (tmp_path / "summary.txt").read_text()
     capsys.readouterr()
     with pytest.raises(SystemExit) as bad:
