@@ -22,7 +22,7 @@ __all__ = ["column_scales", "scaled_lstsq", "thread_pools", "one_blas_thread", "
            "check_identified", "rank_tolerance", "HELD_OUTPUT", "CONSTANT_RTOL", "output_spread", "output_scale",
            "spread_scale", "beyond_float_range", "refuse_beyond_float_range", "refuse_parameter_scales",
            "binary_scaled", "unscaled_theta", "unscaled_rss", "unscaled_levels", "scaled_norm", "scaled_norms",
-           "mean_square"]
+           "mean_square", "binary_exponent"]
 
 _CONTROLLER: list[ThreadpoolController] = []
 
@@ -71,7 +71,7 @@ def column_scales(A: np.ndarray) -> np.ndarray:
         # column in another order): the RMS of a column times 2^k is 2^k times its RMS to the bit, as the plain RMS
         # is where it stays in range (over m itself, and as a lone column, it was rounded otherwise)
         e = np.zeros(A.shape[1], dtype=int)
-        e[far] = np.frexp(np.max(np.abs(B), axis=0))[1]
+        e[far] = binary_exponent(np.max(np.abs(B), axis=0))
         with np.errstate(over="ignore", under="ignore"):  # the other columns' squares are not read
             ms = np.mean(np.ldexp(A, -e) ** 2, axis=0)
         s = np.array(s, dtype=float, ndmin=1)
@@ -82,6 +82,14 @@ def column_scales(A: np.ndarray) -> np.ndarray:
 #: A measured output whose spread ‖y − mean(y)‖ is at most this fraction of ‖y‖ is constant: what is left
 #: is the mean's own round-off (a level of 0.8 held for 39 samples leaves 1e-16), not a signal.
 CONSTANT_RTOL = 1e-13
+
+
+def binary_exponent(m: float | np.ndarray) -> int | np.ndarray:
+    """The exponent e of the power of two above ``m`` (m = f 2^e, 0.5 <= f < 1; exact), elementwise, 0 where m is 0,
+    inf or NaN: x over 2^e, e of m = max|x|, keeps every square of x in the float range."""
+    m = np.asarray(m, float)
+    e = np.where((m > 0) & np.isfinite(m), np.frexp(m)[1], 0)
+    return int(e) if e.ndim == 0 else e
 
 
 def scaled_norm(x: np.ndarray) -> float:
@@ -103,8 +111,7 @@ def scaled_norms(A: np.ndarray, axis: int) -> np.ndarray:
     the power of two above its largest |entry| (exact): rows of a static constraint in an output near 1e155 overflowed
     in numpy's norm (their squares), near 1e-170 underflowed to 0 (a row read as no condition at all)."""
     A = np.asarray(A, float)
-    m = np.max(np.abs(A), axis=axis, keepdims=True, initial=0.0)
-    e = np.where((m > 0) & np.isfinite(m), np.frexp(m)[1], 0)
+    e = binary_exponent(np.max(np.abs(A), axis=axis, keepdims=True, initial=0.0))
     with np.errstate(over="ignore"):
         return np.ldexp(np.linalg.norm(np.ldexp(A, -e), axis=axis), np.squeeze(e, axis=axis))
 
@@ -114,8 +121,7 @@ def mean_square(x: np.ndarray, axis: int = -1) -> np.ndarray:
     (exact): inf or 0 only where the mean square itself leaves the float range, as y² there (errors about 1e160 warned
     'overflow encountered in square', an error under warnings-as-errors)."""
     x = np.asarray(x, float)
-    m = np.max(np.abs(x), axis=axis, keepdims=True, initial=0.0)
-    e = np.where((m > 0) & np.isfinite(m), np.frexp(m)[1], 0)
+    e = binary_exponent(np.max(np.abs(x), axis=axis, keepdims=True, initial=0.0))
     with np.errstate(over="ignore", under="ignore"):
         return np.ldexp(np.mean(np.ldexp(x, -e) ** 2, axis=axis), 2 * np.squeeze(e, axis=axis))
 
@@ -152,8 +158,7 @@ def output_scale(y: np.ndarray) -> float:
         return 1.0
     # on y over the power of two above max|y| (exact), mapped back: y² of an output near 1e155 overflowed (the scale
     # fell to 1, and a QP's step in output units reached 1e155) and near 1e-170 underflowed
-    m = float(np.max(np.abs(y)))
-    e = int(np.frexp(m)[1]) if 0.0 < m < np.inf else 0
+    e = binary_exponent(np.max(np.abs(y)))
     e = e if 2 * abs(e) > _SAFE_EXPONENT else 0  # ordinary outputs as they are (no copy of a long y)
     x = np.ldexp(y, -e) if e else y
     std, rms = float(np.std(x)), float(np.sqrt(np.mean(x**2)))

@@ -68,7 +68,7 @@ from ..static._surfaces import StaticSurface
 from ..static._form_check import varied_inputs
 from ..core._least_squares import (REMEDIES, check_identified, check_rows, column_scales, free_directions,
                                    mean_square, output_scale, rank_tolerance, refuse_parameter_scales, scaled_norm,
-                                   scaled_norms, spread_scale)
+                                   scaled_norms, spread_scale, binary_exponent)
 from ..models._coerce import as_model, as_structure, static_info, static_points
 from ..models._model import Model
 from ._pareto import ParetoSet
@@ -347,8 +347,7 @@ def _r_factor_target(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
     near 1e155 overflowed (yᵀy ≈ 1e312: numpy's 'overflow encountered in matmul', and the fit was lost), of one near
     1e-170 underflowed."""
     n = M.shape[1] - 1
-    m = float(np.max(np.abs(M[:, n]), initial=0.0))
-    e = int(np.frexp(m)[1]) if 0.0 < m < np.inf else 0
+    e = binary_exponent(np.max(np.abs(M[:, n]), initial=0.0))
     if e:  # in place: no copy beside [A, y] (ls_uncertainty's peak memory holds to a few Ψ)
         np.ldexp(M[:, n], -e, out=M[:, n])
     R = _r_factor(M)
@@ -460,7 +459,7 @@ def _target_scale(records: list, L: int, rms: float = 1.0) -> float:
     import dask
     import dask.array as da
 
-    e = int(np.frexp(rms)[1]) if 0.0 < rms < np.inf else 0
+    e = binary_exponent(rms)
     y = da.concatenate([r.y[L:] for r in records]) * math.ldexp(1.0, -e)
     std, ms = dask.compute(da.std(y), da.mean(y**2))
     return math.ldexp(spread_scale(float(std), float(np.sqrt(ms))), e)
