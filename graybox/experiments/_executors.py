@@ -171,13 +171,13 @@ class InProcess:
 # --------------------------------------------------------------------------------------------
 # local worker processes
 # --------------------------------------------------------------------------------------------
-def _exit_on_sigterm(signum, frame) -> None:  # pragma: no cover - runs in the child process
+def _raise_exit(signum, frame) -> None:  # pragma: no cover - runs in the child process
     raise SystemExit(0)
 
 
 def exit_on_sigterm() -> None:  # pragma: no cover - runs in the child process
     """Make SIGTERM end this (worker) process through Python's clean-up, even when it lands in a callback."""
-    signal.signal(signal.SIGTERM, _exit_on_sigterm)
+    signal.signal(signal.SIGTERM, _raise_exit)
     sys.unraisablehook = _exit_past_callbacks
 
 
