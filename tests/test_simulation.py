@@ -76,3 +76,32 @@ def test_kernel_batch_shape_and_initial_conditions(rng):
     Y = simulate_batch(encode(m.structure), np.tile(m.theta, (3, 1)), u, y0, 6)
     assert Y.shape == (3, 50)
     np.testing.assert_array_equal(Y[:, :6], np.tile(y0, (3, 1)))
+
+
+def test_a_kernel_compiles_once_whether_its_arrays_are_read_only_or_not(paper_record):
+    """A model's θ and a record's samples are read-only arrays, a caller's own are writable: numba compiles a kernel
+    once per argument type, so the wrappers hand every kernel one kind (kernel_array), and a second kind of caller
+    costs no second compilation (0.5–3 s each, in every process of a cold cache)."""
+    from graybox.core import _simulation_kernels as K
+
+    m = reference.paper_model(15)
+    code = encode(m.structure)
+    u, y = paper_record.u[:200], paper_record.y[:200]
+    theta = np.array(m.theta, dtype=float)  # writable
+    frozen = theta.copy()
+    frozen.flags.writeable = False
+    strided = np.repeat(u, 2)[::2]  # not contiguous
+
+    def runs(th, uu, yy):
+        K.simulate_one(code, th, uu, yy[:3], 3, None)
+        K.predict_ahead(code, th, uu, yy, 3, 5, None)
+        K.batch_sse(code, th[None, :], uu, yy, 3)
+        K.batch_sse(code, np.vstack([th] * 8), uu, yy, 3, threads=2)
+
+    runs(theta, u, y)
+    kernels = (K._one, K._ahead, K._batch_sse, K._batch_sse_parallel, K._input_products)
+    before = [len(k.signatures) for k in kernels]
+    assert all(before)
+    runs(frozen, strided, np.array(y))
+    runs(theta, np.array(u), y)
+    assert [len(k.signatures) for k in kernels] == before

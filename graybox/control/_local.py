@@ -42,6 +42,7 @@ from ..static._analysis import (CONTINUUM_WHY, NO_EQUILIBRIUM_WHY, REACHED, Equi
                                 equilibria_at_levels, multiple_root, reached_equilibria, schur_stable, several_stable)
 from ..static._linearisation import characteristic_roots, local_coefficients
 from ..static._surface_analysis import _folded, reached_surface
+from ..core._simulation_kernels import kernel_array
 from ..static._equilibrium_kernels import unit_pole
 
 __all__ = ["LocalModel", "OperatingCurve", "local_model", "operating_curve", "jacobian_rows", "check_polynomial",
@@ -135,7 +136,7 @@ def _unit_pole(a: np.ndarray) -> bool:
     """Whether z = 1 is a pole of z^L − a_1 z^(L−1) − … − a_L to rounding (a fold's: 1 − Σ a_l = −∂F/∂ȳ = 0): the
     rule the one stability test applies (:func:`graybox.static._equilibrium_kernels.unit_pole`), so that the local
     model and the static analysis never disagree on a stable equilibrium."""
-    return bool(unit_pole(np.ascontiguousarray(a, dtype=float)))
+    return bool(unit_pole(kernel_array(a)))
 
 
 def _dominant(poles: np.ndarray, Ts: float, unit: bool = False) -> tuple[complex, float, float]:

@@ -34,7 +34,21 @@ from ._terms import Structure, require_inputs
 
 __all__ = ["Code", "encode", "simulate_one", "simulate_batch", "predict_ahead", "input_products", "record_inputs",
            "kernel_inputs", "BOUND_FACTOR", "scaled_bound", "feedback_scale", "feedback_scales", "push_gain",
-           "linear_margins"]
+           "linear_margins", "kernel_array"]
+
+
+def kernel_array(a, dtype=np.float64) -> np.ndarray:
+    """``a`` as every compiled kernel reads an array it does not write: C-contiguous, of ``dtype``, read-only.
+
+    A view when ``a`` already is contiguous of ``dtype`` (a copy otherwise). numba compiles (and caches) one
+    version of a kernel per argument type, and a read-only array (a model's θ, a record's samples) is another
+    type than a writable one: callers passing both paid two compilations of the same kernel, 0.5–3 s each.
+    """
+    out = np.ascontiguousarray(a, dtype=dtype)
+    if out.flags.writeable:
+        out = out.view()
+        out.flags.writeable = False
+    return out
 
 
 class Code(NamedTuple):
@@ -155,10 +169,10 @@ def kernel_inputs(code: Code, u: np.ndarray) -> np.ndarray:
     if u.ndim == 1:
         if len(code.input_names) > 1:
             raise ValueError(f"u has one input column but the structure's inputs are {code.input_names}")
-        return u.reshape(1, u.shape[0])
+        return kernel_array(u.reshape(1, u.shape[0]))
     if u.ndim != 2 or u.shape[1] != len(code.input_names):
         raise ValueError(f"u has shape {u.shape}, expected (N, {len(code.input_names)}) for the inputs {code.input_names}")
-    return np.ascontiguousarray(u.T, dtype=np.float64)
+    return kernel_array(u.T)
 
 
 def record_inputs(record, inputs: tuple[str, ...]) -> np.ndarray:
@@ -183,8 +197,8 @@ def input_products(fptr, fsig, flag, fpow, u, start):
     ``u`` is (N,) for a single input or (N, m) with the columns in the code's input order
     (signal 1 + i reads column i).
     """
-    uc = u.reshape(1, u.shape[0]) if u.ndim == 1 else np.ascontiguousarray(u.T, dtype=np.float64)
-    return _input_products(fptr, fsig, flag, fpow, uc, start)
+    return _input_products(fptr, fsig, flag, fpow, kernel_array(u.reshape(1, u.shape[0]) if u.ndim == 1 else u.T),
+                           start)
 
 
 @nb.njit(cache=True, nogil=True)
@@ -474,8 +488,9 @@ def simulate_one(code: Code, theta: np.ndarray, u: np.ndarray, y0: np.ndarray, s
     uc = kernel_inputs(code, u)
     scale = feedback_scale(code, theta, u) if bound is None else 0.0
     margin = float(linear_margins(code, theta)[0]) if bound is None else 1.0
-    return _one(code.uptr, code.ulag, code.upow, code.usig, code.grp, code.gny, code.gylag, theta, uc.reshape(-1),
-                uc.shape[1], y0, start, 0.0 if bound is None else float(bound), bound is None, scale, margin)
+    return _one(code.uptr, code.ulag, code.upow, code.usig, code.grp, code.gny, code.gylag, kernel_array(theta),
+                uc.reshape(-1), uc.shape[1], kernel_array(y0), start, 0.0 if bound is None else float(bound),
+                bound is None, scale, margin)
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -565,8 +580,7 @@ def predict_ahead(code: Code, theta: np.ndarray, u: np.ndarray, y: np.ndarray, s
     scale = feedback_scale(code, theta, u) if bound is None else 0.0
     margin = float(linear_margins(code, theta)[0]) if bound is None else 1.0
     return _ahead(code.uptr, code.ulag, code.upow, code.usig, code.grp, code.gny, code.gylag,
-                  np.ascontiguousarray(theta, dtype=np.float64), uc.reshape(-1), uc.shape[1],
-                  np.ascontiguousarray(y, dtype=np.float64), start, horizon,
+                  kernel_array(theta), uc.reshape(-1), uc.shape[1], kernel_array(y), start, horizon,
                   0.0 if bound is None else float(bound), bound is None, scale, margin)
 
 
@@ -740,7 +754,7 @@ def simulate_batch(
     """
     P = thetas.shape[0]
     n = u.shape[0]
-    thT = np.ascontiguousarray(thetas.T, dtype=np.float64)
+    thT = kernel_array(thetas.T)
     U = _input_products(code.fptr, code.fsig, code.flag, code.fpow, kernel_inputs(code, u), start)
     ref = _member_scales(code, thetas, u, y0, start, bounded)
     margin = linear_margins(code, thetas) if bounded else np.zeros(0)
@@ -751,7 +765,7 @@ def simulate_batch(
             _batch_block(thT, U, code.ny, code.ylag, Y, start, ref, margin)
             # a transposed view, not a copy: copying 5 MB cost more than the whole batch run
             return Y.T
-        blocks = _blocks(thT, int(threads))
+        blocks = kernel_array(_blocks(thT, int(threads)))  # read-only, as thT is: one compiled kernel
         Y = np.empty((blocks.shape[0], n, blocks.shape[2]))
         Y[:, :start, :] = y0[None, :start, None]
         _batch_block_parallel(blocks, U, code.ny, code.ylag, Y, start, _ref_blocks(ref, blocks),
@@ -858,7 +872,7 @@ def batch_sse(
     -------
     ndarray, shape (P,)
     """
-    thT = np.ascontiguousarray(np.asarray(thetas, dtype=np.float64).T)
+    thT = kernel_array(np.asarray(thetas, dtype=np.float64).T)
     if U is None:
         U = _input_products(code.fptr, code.fsig, code.flag, code.fpow, kernel_inputs(code, u), start)
     ref = _member_scales(code, np.atleast_2d(np.asarray(thetas, dtype=np.float64)), u, y, start, bounded)
@@ -867,9 +881,9 @@ def batch_sse(
     with np.errstate(all="ignore"):
         P = thT.shape[1]
         if threads <= 1 or P < 2 * threads:
-            return _batch_sse(thT, U, code.ny, code.ylag, y, start, ring, ref, margin)
-        blocks = _blocks(thT, int(threads))
-        return _batch_sse_parallel(blocks, U, code.ny, code.ylag, y, start, ring, _ref_blocks(ref, blocks),
+            return _batch_sse(thT, U, code.ny, code.ylag, kernel_array(y), start, ring, ref, margin)
+        blocks = kernel_array(_blocks(thT, int(threads)))  # read-only, as thT is: one compiled kernel
+        return _batch_sse_parallel(blocks, U, code.ny, code.ylag, kernel_array(y), start, ring, _ref_blocks(ref, blocks),
                                    _ref_blocks(margin - 1.0, blocks) + 1.0).ravel()[:P]  # padding: margin 1
 
 
@@ -925,7 +939,7 @@ def _sensitivity(ny, ylag, theta, U, y0, start):  # pragma: no cover - compiled
     S = np.zeros((n, theta.shape[0]))
     for k in range(start):
         yh[k] = y0[k]
-    _sensitivity_rows(ny, ylag, theta, U, yh, S, start, n, 0)
+    _sensitivity_rows(ny, ylag, theta, U, yh, S, start, n, np.int64(0))
     return yh, S
 
 
@@ -960,7 +974,7 @@ def free_run_sensitivity_blocks(
     S : ndarray, shape (k1 − k0, n_terms)
         ∂ŷ(k)/∂θ_j for k in [k0, k1): a view into a buffer reused by the next block.
     """
-    theta = np.asarray(theta, float)
+    theta = kernel_array(theta)
     n = U.shape[0]
     H = max(int(start), 1)
     block = max(int(block), H)
@@ -970,7 +984,7 @@ def free_run_sensitivity_blocks(
     for k0 in range(start, n, block):
         k1 = min(k0 + block, n)
         with np.errstate(all="ignore"):
-            _sensitivity_rows(code.ny, code.ylag, theta, U, yh, buf, k0, k1, k0 - H)
+            _sensitivity_rows(code.ny, code.ylag, theta, U, yh, buf, k0, k1, np.int64(k0 - H))
         yield k0, k1, yh, buf[H:H + k1 - k0]
         buf[:H] = buf[k1 - k0:k1 - k0 + H]  # the rows the next block's feedback reads
 
@@ -991,7 +1005,7 @@ def free_run_sensitivity(
     if U is None:
         U = _input_products(code.fptr, code.fsig, code.flag, code.fpow, kernel_inputs(code, u), start)
     with np.errstate(all="ignore"):
-        return _sensitivity(code.ny, code.ylag, np.asarray(theta, float), U, y0, start)
+        return _sensitivity(code.ny, code.ylag, kernel_array(theta), U, kernel_array(y0), start)
 
 
 __all__ += ["batch_sse", "free_run_sensitivity", "free_run_sensitivity_blocks"]

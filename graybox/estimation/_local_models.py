@@ -27,7 +27,7 @@ from typing import Sequence
 import numpy as np
 
 from ..core._records import Record
-from ..core._simulation_kernels import encode, record_inputs
+from ..core._simulation_kernels import encode, kernel_array, record_inputs
 from ..core._terms import Structure
 from ..core._validation import check_choice, check_real
 from ..static._equilibrium_kernels import schur_stable_rows
@@ -175,7 +175,7 @@ def _within(a: np.ndarray, margin: float) -> np.ndarray:
     r = 1.0 - margin
     if r <= 0.0:
         return np.zeros(a.shape[0], bool)
-    return schur_stable_rows(np.ascontiguousarray(a / r ** np.arange(1, a.shape[1] + 1)))
+    return schur_stable_rows(kernel_array(a / r ** np.arange(1, a.shape[1] + 1)))
 
 
 def _radius(a: np.ndarray) -> np.ndarray:

@@ -134,7 +134,7 @@ from ..core._records import (Dataset, Record, as_records, carried_from, check_fi
 from ..core._validation import (Relocked, check_bool, check_choice, check_int, check_per_point, check_real, check_seed,
                                 check_str, frozen, check_fields, real_array, short_value)
 from ..core._simulation import DivergenceError, default_bound, free_run_inputs
-from ..core._simulation_kernels import record_inputs
+from ..core._simulation_kernels import kernel_array, record_inputs
 from ..core._terms import check_input_names
 from ..static._analysis import (NET, Equilibrium, Reached, one_input_levels, only_stable, point_phrases, schur_stable,
                                 settle, spectral_radius, verdict_radius)
@@ -883,7 +883,8 @@ def _unpack(theta: np.ndarray, H: int, n_in: int) -> tuple[np.ndarray, np.ndarra
     W1 = theta[: H * n_in].reshape(H, n_in)
     b1 = theta[H * n_in: H * n_in + H]
     w2 = theta[H * n_in + H: H * n_in + 2 * H]
-    return np.ascontiguousarray(W1), b1.copy(), w2.copy(), float(theta[-1])
+    # read-only, as a fitted model's weights are: the kernels then compile once for both (kernel_array)
+    return kernel_array(W1), kernel_array(b1.copy()), kernel_array(w2.copy()), float(theta[-1])
 
 
 def _deterministic(H: int, ny: int, nu: int, ne: int) -> np.ndarray:

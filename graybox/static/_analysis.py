@@ -52,7 +52,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..core._simulation_kernels import encode
+from ..core._simulation_kernels import encode, kernel_array
 from ._equilibrium_kernels import (
     DIVERGED,
     NET,
@@ -587,8 +587,7 @@ def schur_stable(a: np.ndarray) -> np.ndarray:
     bool or ndarray of bool, shape (K,)
     """
     arr = np.asarray(a, float)
-    rows = np.ascontiguousarray(np.atleast_2d(arr))
-    out = schur_stable_rows(rows)
+    out = schur_stable_rows(kernel_array(np.atleast_2d(arr)))
     return bool(out[0]) if arr.ndim <= 1 else out
 
 
@@ -616,7 +615,7 @@ def stable_mask(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, ybar
         return np.isfinite(yb)
     fin = np.isfinite(yb)
     a = grid_coefficients(structure, thetas, np.asarray(ubar, float), np.where(fin, yb, 0.0))
-    return schur_stable_rows(np.ascontiguousarray(a.reshape(-1, a.shape[2]))).reshape(yb.shape) & fin
+    return schur_stable_rows(kernel_array(a.reshape(-1, a.shape[2]))).reshape(yb.shape) & fin
 
 
 def _roots_stable(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, roots: np.ndarray) -> np.ndarray:
@@ -1031,7 +1030,7 @@ def settle(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, roots: np.
         failed[groups[~run]] = True  # a pair with no stable equilibrium is not reached
     if run.any():
         sel = slice(None) if run.all() else run  # every pair runs: views, no copies
-        ip = np.ascontiguousarray(ip, dtype=np.int64)
+        ip = kernel_array(ip, np.int64)
         L = max(int(L), 1)
         grp = () if groups is None else (np.ascontiguousarray(groups[sel]), failed, False)
         with np.errstate(all="ignore"):
@@ -1121,7 +1120,7 @@ def _contracting_runs(ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, hist: np.n
         j = np.argmin(dist, axis=1)
         r, tl = cand[rows, j], tol[rows, j]
         other = np.where(valid & (np.arange(C)[None, :] != j[:, None]), np.abs(cand - r[:, None]), np.inf).min(axis=1)
-        a = candidate_linearisations(POLY, ip, np.ascontiguousarray(fp, dtype=float),
+        a = candidate_linearisations(POLY, kernel_array(ip, np.int64), np.ascontiguousarray(fp, dtype=float),
                                      np.ascontiguousarray(r[:, None]), np.ones(K, dtype=np.int64), L)[:, 0, :]
         A = np.zeros((K, L, L))
         A[:, 0, :] = np.where(np.isfinite(a), a, 0.0)
@@ -1237,7 +1236,7 @@ def settle_budget(kind: int, ip: np.ndarray, fp: np.ndarray, cand: np.ndarray, n
     returned as ``SETTLE_MAX_STEPS + 1`` (the run cannot be judged). Shapes: ``fp`` (K, nf),
     ``cand`` (K, C), ``ncand`` (K,); returns int64 (K,) and ln ρ (K, C), NaN past a pair's candidates.
     """
-    a = candidate_linearisations(int(kind), ip, np.ascontiguousarray(fp, dtype=float),
+    a = candidate_linearisations(int(kind), kernel_array(ip, np.int64), np.ascontiguousarray(fp, dtype=float),
                                  np.ascontiguousarray(cand, dtype=float), ncand, int(L))  # (K, C, L)
     K, C, _ = a.shape
     with np.errstate(all="ignore"):

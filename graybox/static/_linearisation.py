@@ -29,7 +29,7 @@ from functools import cached_property, lru_cache
 
 import numpy as np
 
-from ..core._simulation_kernels import Code, encode
+from ..core._simulation_kernels import Code, encode, kernel_array
 from ..core._terms import Structure
 from ._equilibrium_kernels import entry_sums
 
@@ -153,8 +153,7 @@ class DerivativeMap:
         """a from each row's θ (R, T), ȳ (R,) and the entries' input parts U (R, entries): ((θ_t G_tl) ȳ^(P_y − 1)) ∏ ū^P,
         summed per lag entry by entry in order (no pairwise reordering), compiled (:func:`entry_sums`)."""
         t, l, g, yexp = self._entries
-        return entry_sums(np.ascontiguousarray(th, dtype=float), np.ascontiguousarray(yb, dtype=float),
-                          np.ascontiguousarray(U, dtype=float), t, l, g, yexp, self.Ly)
+        return entry_sums(kernel_array(th), kernel_array(yb), kernel_array(U), t, l, g, yexp, self.Ly)
 
     def entry_inputs(self, ubar: np.ndarray) -> np.ndarray:
         """The input part ∏ ū^P of each entry of G at fixed points ``ubar`` (as for :meth:`input_part`), shape
