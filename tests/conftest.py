@@ -364,6 +364,9 @@ def pytest_collection_modifyitems(session, config, items):
     if config.option.collectonly:
         return
     beside = [] if os.environ.get(_BESIDE_ENV) else [item for item in items if runs_beside(item)]
+    docs = [item for item in items if item.path.name == DOCS_TESTS]
+    if beside or docs:
+        warm_up(config)  # before the processes that would each compile the kernels start
     if beside:
         runs = config.stash[_BESIDE_RUN] = {}
         for lane in LANES:
@@ -375,13 +378,48 @@ def pytest_collection_modifyitems(session, config, items):
             for when, method in (("setup", "setup"), ("call", "runtest"), ("teardown", "teardown")):
                 setattr(item, method, (lambda it, r, w: lambda: _verdict_of(it, r, w))(item, run, when))
         config.stash[_SUITE_START] = time.monotonic()
-    docs = [item for item in items if item.path.name == DOCS_TESTS]
     last = beside + docs
     if not last:
         return
     items[:] = [item for item in items if item not in last] + last
     if docs:
         config.stash[_SITE_BUILD] = start_site_build()
+
+
+# --- numba's cache, filled before the processes that read it start ----------------------------------------------------
+_WARM_UP = pytest.StashKey[dict]()
+#: tests/_warm_kernels.py's parts, run side by side.
+WARM_PARTS = ("simulation", "statics")
+
+
+def warm_kernels() -> dict:
+    """Run tests/_warm_kernels.py's parts side by side and wait for them: part -> (return code, its stderr).
+
+    On a fresh checkout (CI's) the suite's pytests, the Sphinx build's notebook kernels and the worker processes all
+    compiled the kernels they met before any had cached them (a fresh-clone suite used 116 s more CPU than a warm
+    one, one compilation of every kernel ~40 s: BENCHMARKS.md); compiled first, in two processes, they are
+    loaded from the cache by every process after. On a warm cache the parts take a few seconds."""
+    import subprocess
+    import sys
+    import tempfile
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent
+    tmp = Path(tempfile.mkdtemp(prefix="graybox-warm-"))
+    procs = {}
+    for part in WARM_PARTS:
+        with open(tmp / part, "w") as err:
+            procs[part] = subprocess.Popen([sys.executable, str(root / "_warm_kernels.py"), part], cwd=root.parent,
+                                           stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err)
+    return {part: (proc.wait(), (tmp / part).read_text(encoding="utf-8", errors="replace"))
+            for part, proc in procs.items()}
+
+
+def warm_up(config) -> dict:
+    """The warm-up run as the suite began (:func:`warm_kernels`), or one run now (its test run on its own)."""
+    if _WARM_UP not in config.stash:
+        config.stash[_WARM_UP] = warm_kernels()
+    return config.stash[_WARM_UP]
 
 
 def site_build(config) -> dict:
