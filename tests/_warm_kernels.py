@@ -86,8 +86,10 @@ def statics() -> None:
         cubic = gb.parse_structure(["y(k-1)", "y(k-1)^2", "y(k-1)^3", "u(k-1)", "1"])
         gb.equilibria(cubic, np.array([0.5, 0.1, -0.05, 0.2, 0.01]), 1.0)
         gb.select_graybox(cand, data, band=1.0, sizes=[3], progress=False)
-        slow = gb.Model(gb.parse_structure(["y(k-1)", "u(k-1)"]), np.array([0.9995, 0.0005]))
-        gb.jsf(slow, static)  # a run too slow for the first budget: settle_budget
+        quadratic = gb.parse_structure(["y(k-1)", "y(k-1)^2", "u(k-1)"])
+        slow = gb.Model(quadratic, np.array([1 - 2e-5, -4e-7, 1.6e-5]))  # settles past the first budget
+        gb.jsf(slow, static)  # settling runs (not rational in y), a second budget
+        gb.se_pareto(quadratic, rec, static, lambdas=[0.5, 1.0], method="gradient", progress=False)  # members' J_SF
         generate_miso()
 
 
