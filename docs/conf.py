@@ -144,6 +144,17 @@ def setup(app):  # noqa: ANN001, ANN201
 
 
 # --- the notebooks, executed in quick mode -------------------------------------------------------
+#: Set by the test suite (tests/conftest.py): a folder for the verdicts of the notebooks' checks, which run in the
+#: kernels of this build rather than in a second execution of every notebook.
+CHECKS = os.environ.get("GRAYBOX_NOTEBOOK_CHECKS", "")
+
+
+def _hidden_cell(source: str) -> dict:
+    """A code cell the site does not show (myst-nb's ``remove-cell`` tag)."""
+    return {"cell_type": "code", "metadata": {"tags": ["remove-cell"]}, "source": source, "outputs": [],
+            "execution_count": None}
+
+
 def _copy_notebooks() -> None:
     out = HERE / "notebooks"
     shutil.rmtree(out, ignore_errors=True)
@@ -153,6 +164,11 @@ def _copy_notebooks() -> None:
         first = next(c for c in nb["cells"] if c["cell_type"] == "code")
         first["source"] = ["QUICK = True  # the documentation runs every notebook in its quick mode"]
         nb["nbformat_minor"] = max(nb.get("nbformat_minor", 0), 5)
+        if CHECKS:  # the test suite's build: its checks run in the notebook's own kernel (tests/_notebook_checks.py)
+            nb["cells"] = [_hidden_cell(f"import sys\nsys.path.insert(0, {str(ROOT / 'tests')!r})\n"
+                                        "import _notebook_checks\n_notebook_checks.start()"),
+                           *nb["cells"],
+                           _hidden_cell(f"_notebook_checks.finish({src.name!r}, globals(), {CHECKS!r})")]
         for i, cell in enumerate(nb["cells"]):  # cell ids, which nbformat 4.5 requires
             cell.setdefault("id", f"cell-{i}")
         (out / src.name).write_text(json.dumps(nb, indent=1), encoding="utf-8")

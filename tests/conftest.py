@@ -177,8 +177,9 @@ def edited_json(value, **fields) -> str:
 # --- the documentation site, built beside the rest of the suite -----------------------------------
 # The Sphinx build (tests/test_docs.py) runs every notebook in its own kernel: about a minute of one core, while
 # the suite leaves the second core mostly idle. It is started in its own process as the suite begins, and the
-# docs tests run last and wait for it.
-DOCS_TESTS = "test_docs.py"
+# docs tests run last and wait for it. It is the suite's one execution of the notebooks: their checks run in its
+# kernels (tests/_notebook_checks.py) and tests/test_notebooks.py reads their verdicts.
+DOCS_TESTS = ("test_docs.py", "test_notebooks.py")
 _SITE_BUILD = pytest.StashKey[dict]()
 
 
@@ -192,10 +193,12 @@ def start_site_build() -> dict:
 
     root = Path(__file__).resolve().parents[1]
     tmp = Path(tempfile.mkdtemp(prefix="graybox-docs-"))
+    (tmp / "notebook-checks").mkdir()  # the verdicts of the notebooks' checks (tests/_notebook_checks.py)
     with open(tmp / "stdout", "w") as out, open(tmp / "stderr", "w") as err:
         proc = subprocess.Popen([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-b", "html",
                                  str(root / "docs"), str(tmp / "html")], stdout=out, stderr=err, cwd=root,
-                                stdin=subprocess.DEVNULL, start_new_session=True)
+                                stdin=subprocess.DEVNULL, start_new_session=True,
+                                env=dict(os.environ, GRAYBOX_NOTEBOOK_CHECKS=str(tmp / "notebook-checks")))
     return {"proc": proc, "tmp": tmp}
 
 
@@ -215,7 +218,7 @@ def finish_site_build(build: dict) -> tuple[int, str, "object"]:
 # the suite's own tests 315 s, beside 304 s, waiting 319 s; BENCHMARKS.md): move files between them to keep them even.
 BESIDE = ("test_guide_code.py::test_every_python_block_of_a_page_runs[selection.md]",
           "test_readme_api.py::test_selection_example_runs",
-          "test_select_checkpoint.py", "test_notebooks.py", "test_bootstrap.py", "test_gram.py", "test_hunt36a.py",
+          "test_select_checkpoint.py", "test_bootstrap.py", "test_gram.py", "test_hunt36a.py",
           "test_divergence_bound.py", "test_slow_modes.py", "test_hunt30c.py", "test_constant_output.py",
           "test_uncertainty.py", "test_siso_pins.py", "test_control.py",
           "test_select_graybox.py", "test_hunt28.py", "test_grid_growth.py")
@@ -364,7 +367,7 @@ def pytest_collection_modifyitems(session, config, items):
     if config.option.collectonly:
         return
     beside = [] if os.environ.get(_BESIDE_ENV) else [item for item in items if runs_beside(item)]
-    docs = [item for item in items if item.path.name == DOCS_TESTS]
+    docs = [item for item in items if item.path.name in DOCS_TESTS]
     if beside or docs:
         warm_up(config)  # before the processes that would each compile the kernels start
     if beside:

@@ -57,6 +57,7 @@ def test_notebooks_are_rendered_with_their_outputs(site):
         nb = json.loads((ROOT / "notebooks" / f"{name}.ipynb").read_text(encoding="utf-8"))
         makes_figures = any("plots." in "".join(c["source"]) for c in nb["cells"] if c["cell_type"] == "code")
         assert "cell_output" in page, f"{name}: rendered without outputs"
+        assert "_notebook_checks" not in page, f"{name}: the suite's hidden check cells are shown"
         if makes_figures:
             assert "<img" in page, f"{name}: a notebook that draws figures shows none"
 

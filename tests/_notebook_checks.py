@@ -1,0 +1,108 @@
+"""The checks of the notebooks' quick runs, made inside the documentation build's notebook kernels.
+
+The suite executes each notebook once, as the documentation site shows it: tests/conftest.py starts the Sphinx build
+with ``GRAYBOX_NOTEBOOK_CHECKS`` naming a folder, docs/conf.py then gives each notebook's copy two hidden cells (tag
+``remove-cell``): a first that records every warning (:func:`start`), a last that runs the notebook's checks on its
+namespace (:func:`finish`) and writes the verdict, ``<folder>/<notebook>.json``, which tests/test_notebooks.py reads.
+A check that fails is written down, not raised: the page still builds and the test names what failed.
+"""
+
+from __future__ import annotations
+
+import json
+import traceback
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+#: The notes each notebook's quick run gives a reader (a warning's class name and a regular expression its message
+#: matches), asserted by tests/test_notebooks.py: a missing one or a new one fails.
+EXPECTED_WARNINGS: dict[str, list[tuple[str, str]]] = {
+    "01_black_box.ipynb": [("CandidateWarning", r"u\(k-4\)u\(k-5\)\^2")],
+    "02_gray_box_convex.ipynb": [],
+    "03_simulation_error.ipynb": [],
+    "04_buck_converter.ipynb": [("StaticRangeWarning", r"ū = \[1\.0, 4\.0\]"),
+                                ("StaticRangeWarning", r"ū = \[1\.5, 1\.75, 2\.0, 2\.75")],
+    "05_constraint_variants.ipynb": [],
+    "06_miso.ipynb": [],
+    "07_control.ipynb": [],
+}
+
+_CAUGHT: list[tuple[str, str]] = []
+
+
+def start() -> None:
+    """Record every warning the notebook gives from here on (each shown as well, as the kernel would)."""
+    show = warnings.showwarning
+
+    def record(message, category, filename, lineno, file=None, line=None):  # noqa: ANN001, ANN202
+        _CAUGHT.append((category.__name__, str(message)))
+        show(message, category, filename, lineno, file, line)
+
+    warnings.simplefilter("always")  # each one, not its first at a place only: a repeated note is a new one
+    warnings.showwarning = record
+
+
+def _pumping_notebook(ns: dict) -> None:
+    assert ns["QUICK"] is True
+
+
+def _simulation_error(ns: dict) -> None:
+    assert ns["QUICK"] is True
+    # the gradient sweep's first member runs slow, so the whole sweep is fitted inside the margin (margin="auto"),
+    # with the checkpoint of that sweep
+    assert sorted(p.name for p in Path("checkpoints").iterdir()) == ["se_ga_quick.npz", "se_gradient_quick.margin.npz"]
+
+
+def _grid(ns: dict) -> None:
+    assert ns["QUICK"] is True
+    stores = sorted(p.name for p in Path("grid_results").iterdir())
+    assert any(n.startswith("pumping-quick") for n in stores), stores
+    assert (ns["pumping"]["status"] == "ok").sum() >= 4 * 6  # at least 4 structures × 6 variants that ran
+    assert "pumping" in ns["summary"].columns and "buck" in ns["summary"].columns
+
+
+def _miso(ns: dict) -> None:
+    assert ns["QUICK"] is True
+    # the CLS model meets the fitted surface (eq. (22) on two inputs)
+    ub = ns["data"].static.ubar
+    assert abs(ns["cls"].static_curve(ub) - ns["surface"](ub)).max() < 1e-8
+    assert (ns["results"].status == "ok").sum() >= 6
+
+
+def _control(ns: dict) -> None:
+    assert ns["QUICK"] is True
+    # the gray-box model's local gain is the plant's static slope (the static curve is imposed) ...
+    np.testing.assert_allclose(ns["table"]["gain CLS"], ns["table"]["gain plant"], rtol=0.02)
+    # ... its time constant falls with the speed, as the plant's does
+    assert np.all(np.diff(ns["oc"].time_constant) < 0) and np.all(np.diff(ns["tau_plant"]) < 0)
+    # the loops designed on the model behave alike on the model and on the plant, at every operating point
+    s = ns["summary"]
+    assert np.all(s["max |model − plant| (mlc)"] < 0.15 * ns["STEP"])  # the text: "less than 0.15 mlc"
+    assert np.all(np.abs(s["rise model (s)"] - s["rise plant (s)"]) <= 0.2)
+    # local PIs rise alike across the range; the one PI of 1200 rpm does not
+    spread = s["rise plant (s)"].groupby(level="controller").agg(lambda r: r.max() - r.min())
+    assert spread["local PI"] < 0.5 * spread["PI of 1200 rpm"]
+
+
+CHECKS = {
+    "01_black_box.ipynb": _pumping_notebook,
+    "02_gray_box_convex.ipynb": _pumping_notebook,
+    "03_simulation_error.ipynb": _simulation_error,
+    "04_buck_converter.ipynb": _pumping_notebook,  # the measurements ship with graybox: never skipped
+    "05_constraint_variants.ipynb": _grid,
+    "06_miso.ipynb": _miso,
+    "07_control.ipynb": _control,
+}
+
+
+def finish(name: str, ns: dict, folder: str) -> None:
+    """Run notebook ``name``'s checks on its namespace; write the verdict to ``folder``/``name``.json."""
+    try:
+        CHECKS[name](ns)
+        error = None
+    except Exception:  # noqa: BLE001 - written down for the test to report
+        error = traceback.format_exc()
+    verdict = {"error": error, "warnings": _CAUGHT}
+    (Path(folder) / f"{name}.json").write_text(json.dumps(verdict, ensure_ascii=False), encoding="utf-8")
