@@ -97,7 +97,7 @@ def test_a_test_the_pytest_beside_did_not_run_is_one_error(tmp_path):
     # a test only the suite collects (the pytest beside it has no verdict for it): one error, at its setup, not a
     # second at its teardown
     shutil.copy(TESTS / "conftest.py", tmp_path / "conftest.py")
-    (tmp_path / "test_notebooks.py").write_text(textwrap.dedent("""
+    (tmp_path / "test_bootstrap.py").write_text(textwrap.dedent("""
         import os
 
         if not os.environ.get("GRAYBOX_TESTS_BESIDE"):
@@ -106,7 +106,7 @@ def test_a_test_the_pytest_beside_did_not_run_is_one_error(tmp_path):
     """))
     env = {k: v for k, v in os.environ.items() if k != "GRAYBOX_TESTS_BESIDE"}
     subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", f"--basetemp={tmp_path / 'bt'}",
-                    f"--junitxml={tmp_path / 'suite.xml'}", "test_notebooks.py"],
+                    f"--junitxml={tmp_path / 'suite.xml'}", "test_bootstrap.py"],
                    cwd=tmp_path, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=300)
     assert _outcomes(tmp_path / "suite.xml") == {"test_only_in_the_suite": "error"}
 
