@@ -394,6 +394,8 @@ def pytest_collection_modifyitems(session, config, items):
 _WARM_UP = pytest.StashKey[dict]()
 #: tests/_warm_kernels.py's parts, run side by side.
 WARM_PARTS = ("simulation", "statics")
+#: Seconds the suite waits for a part (each takes 20–25 s from a cold cache on 2 cores).
+WARM_LIMIT = 240
 
 
 def warm_kernels() -> dict:
@@ -417,8 +419,16 @@ def warm_kernels() -> dict:
         with open(tmp / part, "w") as err:
             procs[part] = subprocess.Popen([sys.executable, str(root / "_warm_kernels.py"), part], cwd=root.parent,
                                            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err)
-    return {part: (proc.wait(), (tmp / part).read_text(encoding="utf-8", errors="replace"))
-            for part, proc in procs.items()}
+    ended = {}
+    for part, proc in procs.items():
+        try:
+            rc = proc.wait(timeout=WARM_LIMIT)
+        except subprocess.TimeoutExpired:  # a hung part must not hold the suite: killed, and its test fails
+            proc.kill()
+            proc.wait()
+            rc = f"killed past conftest.WARM_LIMIT, {WARM_LIMIT} s"
+        ended[part] = (rc, (tmp / part).read_text(encoding="utf-8", errors="replace"))
+    return ended
 
 
 def warm_up(config) -> dict:
