@@ -123,14 +123,14 @@ def quadratic_first_order_data(seed: int):
     return gb.Dataset(rec(300, "ident"), rec(300, "valid"), gb.StaticPoints(ub, (0.2 + 0.3 * ub + 0.05 * ub**2) / 0.4))
 
 
-def first_order_signals(n: int = 300, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
-    """u uniform on [-1, 1] and y(k) = 0.5 y(k-1) + u(k-1) + 0.1 e(k) (e standard normal): the model
-    y(k-1), u(k-1) with θ = (0.5, 1) leaves white residuals."""
+def first_order_signals(n: int = 300, seed: int = 0, noise: float = 0.1) -> tuple[np.ndarray, np.ndarray]:
+    """u uniform on [-1, 1] and y(k) = 0.5 y(k-1) + u(k-1) + ``noise`` e(k) (e standard normal): the model
+    y(k-1), u(k-1) with θ = (0.5, 1) leaves white residuals (none at ``noise=0``)."""
     rng = np.random.default_rng(seed)
     u = rng.uniform(-1, 1, n)
     y = np.zeros(n)
     for k in range(1, n):
-        y[k] = 0.5 * y[k - 1] + u[k - 1] + 0.1 * rng.standard_normal()
+        y[k] = 0.5 * y[k - 1] + u[k - 1] + noise * rng.standard_normal()
     return u, y
 
 

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import graybox as gb
+from conftest import first_order_signals
 
 
 def _plant(n: int = 200, seed: int = 0) -> gb.Record:
@@ -63,11 +64,7 @@ def test_a_tolerance_on_a_short_record_looks_at_the_sizes_its_rows_carry(search)
 def test_the_subset_rss_floor_is_the_one_the_selection_docstring_states():
     # noise-free data: the best subset of 2 terms fits exactly, and its RSS is the round-off floor the
     # docstring names (it said 1e-13 yᵀy, from a Gram matrix; the search floors at 1e-20 yᵀy on a QR factor)
-    rng = np.random.default_rng(0)
-    u = rng.uniform(-1.0, 1.0, 200)
-    y = np.zeros(200)
-    for k in range(1, 200):
-        y[k] = 0.5 * y[k - 1] + u[k - 1]
+    u, y = first_order_signals(200, 0, noise=0.0)
     sel = gb.frols(SPACE, gb.Record(u=u, y=y), n_terms=2, search="exact")
     yy = float(y[2:] @ y[2:])
     assert sel.subset_rss[0] / yy == pytest.approx(1e-20)

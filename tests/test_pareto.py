@@ -11,6 +11,7 @@ from hypothesis.extra.numpy import arrays
 from graybox import Record, Structure, reference
 from graybox.models._evaluate import evaluate_thetas, j1, js, jsf
 from graybox.estimation._pareto import ParetoSet, nondominated_mask
+from conftest import first_order_signals
 
 S15 = reference.STRUCTURE_15
 
@@ -181,11 +182,7 @@ def test_plot_pareto(pset):
 def test_nondominated_refuses_an_objective_no_member_has():
     # a set evaluated without static points has J_SF NaN for every member; nondominated() (J_S, J_SF) dropped every
     # one (a row with a NaN is never kept) and returned an empty set without a word
-    rng = np.random.default_rng(0)
-    u = rng.uniform(-1, 1, 200)
-    y = np.zeros(200)
-    for k in range(1, 200):
-        y[k] = 0.5 * y[k - 1] + u[k - 1]
+    u, y = first_order_signals(200, 0, noise=0.0)
     st_ = Structure(["y(k-1)", "u(k-1)"])
     ps = ParetoSet.from_thetas(st_, [[0.5, 1.0], [0.4, 1.1], [0.6, 0.8]], [1.0, 0.5, 0.1], Record(u, y), None)
     assert np.isnan(ps.JSF).all()
