@@ -596,7 +596,7 @@ def _equilibrium(model: Model, u: np.ndarray, y0: float | None, eqs: list[Equili
         if y0 is None:
             return None, "continuum of equilibria", why + ("; give y0 (the output level ȳ to linearise at, where the "
                                                            "model stays) for the local model there"), False
-        return float(y0), "continuum of equilibria", why + f"; linearised at ȳ = y0 = {y0:.6g}", False
+        return float(y0), "continuum of equilibria", why + f"; linearised at ȳ = y0 = {exact_text(y0)}", False
     if eqs is None:
         eqs = model.equilibria(u if model.n_inputs > 1 else float(u[0]))
     if y0 is None:
@@ -609,9 +609,9 @@ def _equilibrium(model: Model, u: np.ndarray, y0: float | None, eqs: list[Equili
         if not eqs:
             return None, "no equilibrium", f"ū = {label}: {NO_EQUILIBRIUM_WHY}", False
         e = min(eqs, key=lambda e: e.spectral_radius)
-        return e.ybar, "no stable equilibrium", (f"ū = {label}: no stable equilibrium; linearised at the unstable "
-                                                 f"ȳ = {e.ybar:.6g} (spectral radius {e.spectral_radius:.4g})"), \
-            _fold_at(model, u, e.ybar)
+        why = (f"ū = {label}: no stable equilibrium; linearised at the unstable ȳ = {exact_text(e.ybar)} (spectral "
+               f"radius {e.spectral_radius:.4g})")
+        return e.ybar, "no stable equilibrium", why, _fold_at(model, u, e.ybar)
     r = _reached(model, model.theta[None, :], u[None, :], np.array([y0]))
     if r.ok[0, 0]:
         return float(r.ybar[0, 0]), "reached", "", False
@@ -620,7 +620,7 @@ def _equilibrium(model: Model, u: np.ndarray, y0: float | None, eqs: list[Equili
     if not eqs:
         return None, status, reason, False
     e = min(eqs, key=lambda e: abs(e.ybar - y0))
-    return (e.ybar, status, reason + f"; linearised at the equilibrium ȳ = {e.ybar:.6g} nearest y0",
+    return (e.ybar, status, reason + f"; linearised at the equilibrium ȳ = {exact_text(e.ybar)} nearest y0",
             not e.stable and _fold_at(model, u, e.ybar))
 
 
