@@ -510,3 +510,29 @@ def test_identifiability_with_static_points_does_not_depend_on_the_output_unit(s
     p.check_identified()  # the records with the points: no ValueError
     front = se_pareto(st, Record(u, scale * y), sp, lambdas=[0.5], method="gradient")
     assert front.JS[0] / scale ** 2 < 1e-20  # noise-free: the true system, its J_S round-off
+
+
+def test_multistart_evaluates_each_start_once(problem, monkeypatch):
+    """A start's residuals (its feasibility check, then every solver's first evaluation) and its Jacobian factor
+    (every solver's first step) are computed once: each (z, λ1) at most once, the fit's result unchanged."""
+    import graybox.estimation._simulation_error as se
+
+    th0 = problem.ls_theta()
+    lam = 0.6
+    before = se._multistart(problem, lam, [("ls", th0)], ("trf", "dogbox"), 40, 1e-8)
+    seen = {"r": [], "T": []}
+    real_r, real_T = se._residuals, se._r_factor
+
+    def count(kind, real):
+        def wrapped(p, z, lam1):
+            seen[kind].append((z.tobytes(), lam1))
+            return real(p, z, lam1)
+        return wrapped
+
+    monkeypatch.setattr(se, "_residuals", count("r", real_r))
+    monkeypatch.setattr(se, "_r_factor", count("T", real_T))
+    after = se._multistart(problem, lam, [("ls", th0)], ("trf", "dogbox"), 40, 1e-8)
+    z0 = (problem.to_z(th0).tobytes(), lam)
+    assert seen["r"].count(z0) == 1 and seen["T"].count(z0) == 1
+    np.testing.assert_array_equal(after[0], before[0])
+    assert after[1:] == before[1:]  # the same cost, and the same count of evaluations the solvers asked for

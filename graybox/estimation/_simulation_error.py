@@ -1302,6 +1302,35 @@ def _triangle(A: np.ndarray, overwrite: bool = False) -> np.ndarray:
     return np.triu(qr[: min(A.shape)])
 
 
+class _Start:
+    """The residuals and the factor of :func:`_r_factor` at one start z0 of a fit at λ1, each computed once: the
+    start's feasibility check and every solver fitted from it (:func:`_multistart`) evaluate z0 first, and the
+    runs and equilibria there cost a fifteenth of a selection's fits. Other points are evaluated as they come."""
+
+    def __init__(self, problem: SEProblem, z0: np.ndarray, lam1: float):
+        self.problem = problem
+        self.key = np.array(z0, dtype=float).tobytes()  # bit for bit: a start is only ever this very point
+        self.lam1 = lam1
+        self._r: np.ndarray | None = None
+        self._T: np.ndarray | None = None
+
+    def residuals(self, z: np.ndarray) -> np.ndarray:
+        if z.tobytes() != self.key:
+            return _residuals(self.problem, z, self.lam1)
+        if self._r is None:
+            self._r = _residuals(self.problem, z, self.lam1)
+            self._r.flags.writeable = False
+        return self._r
+
+    def r_factor(self, z: np.ndarray) -> np.ndarray:
+        if z.tobytes() != self.key:
+            return _r_factor(self.problem, z, self.lam1)
+        if self._T is None:
+            self._T = _r_factor(self.problem, z, self.lam1)
+            self._T.flags.writeable = False
+        return self._T
+
+
 class _Compressed:
     """The SE least-squares problem as ``least_squares`` sees it: n + 1 residuals, not N.
 
@@ -1313,17 +1342,18 @@ class _Compressed:
     point costs one free run (its Jacobian is needed only where a step is accepted).
     """
 
-    def __init__(self, problem: SEProblem, lam1: float, watch=None):
+    def __init__(self, problem: SEProblem, lam1: float, watch=None, start: _Start | None = None):
         self.problem = problem
         self.lam1 = lam1
         self.n = len(problem.structure)
         self.nfun = 0
         self.last = (None, np.inf)  # the last point with a finite cost, and that cost
         self.watch = watch  # called with θ at every point where a Jacobian is taken (the iterates)
+        self.start = start if start is not None and start.lam1 == lam1 else None
 
     def fun(self, z: np.ndarray) -> np.ndarray:
-        self.nfun += 1
-        r = _residuals(self.problem, z, self.lam1)
+        self.nfun += 1  # counted as the solver asks, whether or not the start's residuals are remembered
+        r = self.start.residuals(z) if self.start is not None else _residuals(self.problem, z, self.lam1)
         f = np.zeros(self.n + 1)
         with np.errstate(over="ignore", invalid="ignore"):
             f[0] = np.sqrt(r @ r) if np.isfinite(r[0]) else np.inf
@@ -1335,7 +1365,7 @@ class _Compressed:
     def jac(self, z: np.ndarray, f: np.ndarray | None = None) -> np.ndarray:
         if self.watch is not None:
             self.watch(self.problem.from_z(z))
-        T = _r_factor(self.problem, z, self.lam1)
+        T = self.start.r_factor(z) if self.start is not None else _r_factor(self.problem, z, self.lam1)
         if not np.all(np.isfinite(T)):
             # bounded run, overflowing sensitivities (a run on the edge of instability): stop here
             last, cost = self.last
@@ -1365,12 +1395,13 @@ class _Stop(Exception):
 
 
 def _fit(problem: SEProblem, theta0: np.ndarray, lam1: float, solver: str, max_nfev: int,
-         tol: float, watch=None) -> tuple[np.ndarray, float, int]:
+         tol: float, watch=None, start: _Start | None = None) -> tuple[np.ndarray, float, int]:
     """One ``least_squares`` fit at λ1 from a feasible θ0: (θ, weighted cost, evaluations).
 
-    ``watch(θ)``, if given, sees every iterate (each point where a Jacobian is taken).
+    ``watch(θ)``, if given, sees every iterate (each point where a Jacobian is taken); ``start``, the
+    evaluations at θ0's coordinates already made or to be shared with other fits from there.
     """
-    cp = _Compressed(problem, lam1, watch)
+    cp = _Compressed(problem, lam1, watch, start)
     # least_squares sees z = θ·scale and the residuals (both in output units) over s, the power of two nearest
     # the output's spread: its tolerances are not all relative (it stops at ‖dx‖ < xtol (xtol + ‖x‖), an absolute
     # step of xtol² where ‖x‖ < xtol, so an output of spread 1e-12 ended the fits early, and "lm" reads gtol as
@@ -1467,7 +1498,8 @@ def _multistart(problem: SEProblem, lam1: float, cands: list[tuple[str, np.ndarr
             continue
         tried.append(th0)
         nfev += 1
-        if not np.isfinite(_residuals(problem, problem.to_z(th0), lam1)[0]):
+        start = _Start(problem, problem.to_z(th0), lam1)
+        if not np.isfinite(start.residuals(problem.to_z(th0))[0]):
             pulled = None
             if problem.margin is not None and np.isfinite(problem.js(th0[None])[0]) \
                     and not problem.within_margin(th0)[0]:
@@ -1476,9 +1508,10 @@ def _multistart(problem: SEProblem, lam1: float, cands: list[tuple[str, np.ndarr
                 why.setdefault(_why_infeasible(problem, th0, lam1), []).append(name)
                 continue
             th0 = pulled[0]
+            start = _Start(problem, problem.to_z(th0), lam1)
         for solver in solvers:
             try:
-                th, c, k = _fit(problem, th0, lam1, solver, max_nfev, tol)
+                th, c, k = _fit(problem, th0, lam1, solver, max_nfev, tol, start=start)
             except (ValueError, np.linalg.LinAlgError) as exc:  # a numerical breakdown ends this run only
                 why.setdefault(str(exc), []).append(f"{name} ({solver})")
                 continue
@@ -1609,8 +1642,9 @@ def gradient_front(
         before = _nearest(thetas, i, "before", 2)
         if before:
             th0 = thetas[before[0]]
-            if np.isfinite(_residuals(problem, problem.to_z(th0), lam1)[0]):
-                th, c, k = _fit(problem, th0, lam1, follow, max_nfev, tol)
+            first = _Start(problem, problem.to_z(th0), lam1)  # its residuals are the fit's first evaluation
+            if np.isfinite(first.residuals(problem.to_z(th0))[0]):
+                th, c, k = _fit(problem, th0, lam1, follow, max_nfev, tol, start=first)
                 return th, c, k + 1
         return _multistart(problem, lam1, candidates(i, thetas, before), restart_solvers, max_nfev, tol)
 
