@@ -274,6 +274,7 @@ def test_rows_hold_the_shared_evaluators_figures(small_store, pumping):
     mem = p.members
     assert len(mem["lambda1"]) == 4
     i = int(np.flatnonzero(mem["lambda1"] == p.lambda1)[0])
+    assert mem["chosen"].tolist() == [float(k == i) for k in range(4)]  # the cell marks its choice, once
     assert mem["JSF"][i] == pytest.approx(p.JSF, rel=1e-9) and mem["JSF"][i] == np.min(mem["JSF"])
     assert mem["JS_valid"][i] == pytest.approx(p.JS_valid, rel=1e-9)
     assert mem["fit_valid"][i] == pytest.approx(p.fit_valid, rel=1e-9)
@@ -845,3 +846,19 @@ def test_all_specs_keep_a_band_free_cell_under_each_data_set_that_shares_it(tmp_
     cols = ["data", "structure", "variant", "status", "band", "JS_valid"]
     pd.testing.assert_frame_equal(every[cols], latest[cols])
     assert set(gx.leaderboard(every, rule="chosen").index.get_level_values("data")) == {"tight", "loose"}
+
+
+def test_candidates_mark_only_the_chosen_member_not_a_neighbour_of_close_lambda():
+    """Two members whose λ differ by 1e-9 (np.isclose takes them for one): only the member the cell chose is
+    marked chosen, by its index (``members["chosen"]``), else by λ's exact value (stores written before)."""
+    from graybox.experiments._report import _candidates
+
+    lam = [0.25, 0.25 + 1e-9, 0.5]
+    members = {"lambda1": np.array(lam), "J1": np.ones(3), "JS": np.ones(3), "JSF": np.ones(3),
+               "JS_valid": np.ones(3), "failure": ["", "", ""]}
+    row = {"data": "d", "structure": "s", "variant": "PE", "lambda1": lam[1], "seed": 0, "status": "ok",
+           "JS_ident": 1.0, "JS_valid": 1.0, "JSF": 1.0, "fit_valid": 0.0, "n_params": 2, "band": np.nan}
+    old = _candidates(pd.DataFrame([{**row, "members": members}]))
+    assert old["chosen"].tolist() == [False, True, False]
+    marked = {**members, "chosen": np.array([1.0, 0.0, 0.0])}  # the index wins over λ
+    assert _candidates(pd.DataFrame([{**row, "members": marked}]))["chosen"].tolist() == [True, False, False]

@@ -288,6 +288,7 @@ def run_cell(cell: Cell, data: gb.Dataset, *, threads: int = 1) -> dict[str, Any
             if pareto is not None:
                 row["members"] = _members(pareto, data)
                 i, rule, in_band = _decide(cell, pareto, data)
+                row["members"]["chosen"] = (np.arange(len(pareto)) == i).astype(np.float64)  # the report's mark
                 model = pareto.member_model(i, name=f"{cell.variant} / {cell.structure}")
                 row.update(lambda1=float(pareto.lambdas[i]), rule=rule,
                            in_band=None if in_band is None else int(in_band))

@@ -170,6 +170,15 @@ _CANDIDATE_COLUMNS = (*_KEYS, "seed", "lambda1", "JS_ident", "JS_valid", "JSF", 
                       "status", "failure", "band")
 
 
+def _chosen_members(m: Mapping, lam: np.ndarray, chosen_lambda: float) -> np.ndarray:
+    """Which of a cell's members its decision chose: the member the cell marked (``m["chosen"]``), else, in a store
+    written before cells marked it, the member whose λ is the chosen λ exactly (the store keeps both as written; a
+    tolerance marked a neighbour of close λ chosen too)."""
+    if "chosen" in m:
+        return np.asarray(m["chosen"], float) == 1.0
+    return lam == chosen_lambda if pd.notna(chosen_lambda) else np.zeros(lam.size, bool)
+
+
 def _candidates(g: pd.DataFrame) -> pd.DataFrame:
     """Every model of the cells of ``g`` (its (data, structure, variant) in the first columns; ``n_params``
     completed by :func:`_n_params`): Pareto members and single models (one frame built from columns, in one pass
@@ -183,7 +192,7 @@ def _candidates(g: pd.DataFrame) -> pd.DataFrame:
             lam = np.asarray(m["lambda1"], float)
             parts = {"seed": [r.seed] * K, "lambda1": lam, "JS_ident": m["JS"], "JS_valid": m["JS_valid"],
                      "JSF": m["JSF"], "fit_valid": m.get("fit_valid", np.full(K, np.nan)), "n_params": [n_p] * K,
-                     "chosen": np.isclose(lam, r.lambda1) if pd.notna(r.lambda1) else np.zeros(K, bool),
+                     "chosen": _chosen_members(m, lam, r.lambda1),
                      "status": [r.status] * K, "failure": list(m.get("failure", [""] * K))}
         elif r.status == "ok":
             K = 1
