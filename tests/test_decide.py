@@ -145,3 +145,14 @@ def test_min_correlation_on_a_long_record_works_in_member_blocks():
         rhos.append(abs(np.corrcoef(xi, m.simulate(rec)[1:])[0, 1]))
     assert d.index == int(np.argmin(rhos))
     assert d.score == pytest.approx(min(rhos), rel=1e-9)
+
+
+@pytest.mark.parametrize("js, jsf, said", [([0.5, np.nan, 2.0], [0.01, 0.01, 0.01], "member 1 .*J_S NaN"),
+                                           ([0.5, 1.0, 2.0], [0.01, np.nan, 0.01], "member 1 .*J_SF NaN")])
+def test_a_member_of_nan_objective_is_refused_by_index_not_skipped(js, jsf, said):
+    """A hand-built set whose member 1 has J_S (or J_SF) NaN: D_SF chose member 0 without a word."""
+    ps = front(js, jsf)
+    with pytest.raises(ValueError, match=said):
+        decide_dsf(ps, band=B)
+    with pytest.raises(ValueError, match=said):
+        decide_dsf(front([5.0, *js[1:]], jsf), band=1e-9, fallback="min_jsf")

@@ -136,6 +136,14 @@ def check_choosable(pareto: ParetoSet, what: str, needs_jsf: bool = True) -> Non
         raise ValueError(f"{what}: no member of the Pareto set ({K} members, method {pareto.method!r}) has a J_SF (NaN: "
                          "the set was evaluated without static points); evaluate it at static points "
                          "(ParetoSet.from_thetas(..., static=points))")
+    if needs_jsf:  # the rules that rank J_SF rank (or break its ties by) J_S: a member not computed is not skipped
+        for nm, v in (("J_S", pareto.JS), ("J_SF", pareto.JSF)):
+            nan = np.flatnonzero(np.isnan(v) & ok)
+            if nan.size:
+                raise ValueError(f"{what}: member{'s' if nan.size > 1 else ''} {', '.join(map(str, nan[:5]))}"
+                                 f"{' …' if nan.size > 5 else ''} of the Pareto set ({K} members, method "
+                                 f"{pareto.method!r}) {'have' if nan.size > 1 else 'has'} {nm} NaN (not computed), "
+                                 "which no rule can rank: evaluate every member (ParetoSet.from_thetas) or drop it")
 
 
 def min_jsf_index(pareto: ParetoSet, what: str = "min J_SF", js: np.ndarray | None = None,
