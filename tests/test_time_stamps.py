@@ -113,7 +113,18 @@ def test_a_spreadsheets_serial_dates_are_refused_not_read_as_seconds(tmp_path, d
     """Days since 1899-12-30 read as seconds gave a sampling period 86,400 times too short, without a word."""
     first = (datetime(2025, 12, 9, 12) - datetime(1899, 12, 30)) / timedelta(days=1)
     f = _csv(tmp_path / "xl.csv", [f"{first + k * seconds / 86400:.{digits}g}" for k in range(20)])
-    with pytest.raises(ValueError, match=rf"serial dates.*2025-12-09 12:00:00, a step of {seconds:g} s.*Ts="):
+    said = rf"serial dates.*2025-12-09 12:00:00 in the 1900 system.*a step of {seconds:g} s.*Ts="
+    with pytest.raises(ValueError, match=said):
+        gb.load_record_csv(f, u="u", y="y", time="t")
+
+
+def test_serial_dates_of_a_1904_workbook_are_named_as_such_not_only_as_1900_dates(tmp_path):
+    """A workbook of the 1904 date system (Mac Excel) counts days from 1904-01-01: the message named its
+    2025-12-09 12:00 as 2021-12-08 12:00 (days since 1899-12-30) alone; the file cannot tell which system wrote it."""
+    first = (datetime(2025, 12, 9, 12) - datetime(1904, 1, 1)) / timedelta(days=1)
+    f = _csv(tmp_path / "mac.csv", [f"{first + k / 86400:.15g}" for k in range(20)])
+    with pytest.raises(ValueError, match=r"serial dates.*2021-12-08 12:00:00 in the 1900 system.*"
+                                         r"2025-12-09 12:00:00 in the 1904 system.*a step of 1 s"):
         gb.load_record_csv(f, u="u", y="y", time="t")
 
 

@@ -1281,10 +1281,11 @@ _ROUND_PERIODS = np.array([m * 10.0**e for e in range(-3, 4) for m in (1, 2, 5) 
 
 def _refuse_serial_dates(p: Path, col: str, t: np.ndarray) -> None:
     """A ``ValueError`` when numeric stamps are a spreadsheet's serial dates (days since 1899-12-30, what Excel
-    writes for a date cell formatted as a number: 46000.5 is 2025-12-09 12:00): every stamp a day of the years
-    1954-2201 and the mean step a round period as a fraction of a day (1 s is 1.157e-5), to within what the digits
-    the stamps are written with leave unknown (at least 0.1 %), where read as seconds the record's period would be
-    86,400 times too short without a word. Seconds that look so are sampled at 86.4 kHz / (1, 2, 5 …), a rate no
+    writes for a date cell formatted as a number: 46000.5 is 2025-12-09 12:00; since 1904-01-01 in a workbook of
+    the 1904 date system, which the message names too): every stamp a day of the years 1954-2201 (1958-2205) and
+    the mean step a round period as a fraction of a day (1 s is 1.157e-5), to within what the digits the stamps are
+    written with leave unknown (at least 0.1 %), where read as seconds the record's period would be 86,400 times too
+    short without a word. Seconds that look so are sampled at 86.4 kHz / (1, 2, 5 …), a rate no
     acquisition uses (100 kHz is 0.864 s of a day: 14 % off; 44.1 kHz 1.96 s: 2 %).
     The mean step, not the median: a General cell shows 11 digits, 1e-6 of a day, so 0.1 s steps print as 1e-6 or
     2e-6 (and are uneven), while their mean keeps the period (to 1e-6 day over the record: 4.5 % of 0.1 s at 20
@@ -1306,9 +1307,13 @@ def _refuse_serial_dates(p: Path, col: str, t: np.ndarray) -> None:
             break
     if abs(seconds / near - 1) > max(1e-3, last * 86400 / ((t.size - 1) * near)):
         return
+    # the file does not say which of Excel's two date systems wrote the numbers: both readings are named
     day = datetime(1899, 12, 30) + timedelta(days=float(t[0]))
+    mac = datetime(1904, 1, 1) + timedelta(days=float(t[0]))
     raise ValueError(f"{p}: column {col!r} holds {t[0]:.10g} and steps by {ref:.4g}: a spreadsheet's serial dates "
-                     f"(days since 1899-12-30: {t[0]:.10g} is {day:%Y-%m-%d %H:%M:%S}, a step of {near:g} s), not "
+                     f"(days since 1899-12-30, or since 1904-01-01 in a workbook of the 1904 date system (Mac Excel): "
+                     f"{t[0]:.10g} is {day:%Y-%m-%d %H:%M:%S} in the 1900 system, {mac:%Y-%m-%d %H:%M:%S} in the "
+                     f"1904 system; a step of {near:g} s), not "
                      "seconds, which would make the sampling period 86,400 times too short; format the column as "
                      "dates and times (2026-11-20 09:14:03.5) before saving the file, convert it to seconds "
                      "(pandas: (x - x[0]) * 86400), or leave time= out and give Ts=")
