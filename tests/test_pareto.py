@@ -204,3 +204,38 @@ def test_extra_values_cannot_take_the_name_of_the_sets_own(name):
         ParetoSet(*args, {1: [9.0, 9.0]})
     frame = ParetoSet(*args, {"js": [9.0, 9.0]}).to_frame()
     assert frame["JS"].tolist() == [1.0, 2.0] and frame["js"].tolist() == [9.0, 9.0]
+
+
+def _scaled_set(e: int) -> ParetoSet:
+    """Two members of y(k-1), u(k-1) on a first-order record and three static points, y (and ȳ) times 2^e."""
+    import graybox as gb
+    from graybox import StaticPoints
+
+    u, y = first_order_signals(200, 0, noise=0.1)
+    s = 2.0**e
+    ub = np.array([-0.5, 0.0, 0.5])
+    st = gb.parse_structure(["y(k-1)", "u(k-1)"])
+    return ParetoSet.from_thetas(st, np.array([[0.5, 1.0], [0.45, 1.1]]) * [1, s], [0.5, 0.7],
+                                 Record(u, y * s, Ts=1.0), StaticPoints(ub, (2 * ub + 0.01) * s))
+
+
+@pytest.mark.parametrize("e", [512, -505])
+def test_members_js_at_a_huge_or_tiny_output_are_the_ordinary_ones_times_its_square(e):
+    """At y × 2^512 J_S (about 2^1018) was inf: the records' samples times J_S overflowed; the J's are the same
+    problem's in ordinary units, times 2^(2e) (a power of two: exact)."""
+    ordinary, far = _scaled_set(0), _scaled_set(e)
+    for nm in ("J1", "JS", "JSF"):
+        np.testing.assert_allclose(getattr(far, nm), np.ldexp(getattr(ordinary, nm), 2 * e), rtol=1e-12, err_msg=nm)
+
+
+@pytest.mark.parametrize("e, reads", [(700, "inf"), (-700, "0")])
+def test_members_js_beyond_the_float_range_are_refused_by_the_decision_rules(e, reads):
+    """At y × 2^±700 the J's (output units², about 2^±1400) read inf (every member 'diverged') or 0 (every member
+    perfect), and D_SF chose among them without a word; the set is kept (its θ are right), the choice refused."""
+    from graybox import decide_dsf
+
+    far = _scaled_set(e)
+    assert np.all(far.JS == float(reads))
+    said = rf"decide_dsf: member 0's J_S is {reads} .*2\^{e + 1}.*beyond the float range"
+    with pytest.raises(ValueError, match=said):
+        decide_dsf(far, band=1.0, fallback="min_jsf")

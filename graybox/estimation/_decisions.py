@@ -25,6 +25,7 @@ from ..models._model import Model
 from ._pareto import ParetoSet
 from ..core._records import (Record, RecordPrint, check_overlap, check_print_overlap, choosing_records, require_lengths,
                              same_record)
+from ..core._least_squares import binary_exponent
 from ..core._reprs import beside, bound_text, squared_text
 from ..core._regressors import regressor_matrix
 from ..core._simulation import simulate_many
@@ -136,6 +137,8 @@ def check_choosable(pareto: ParetoSet, what: str, needs_jsf: bool = True) -> Non
         raise ValueError(f"{what}: no member of the Pareto set ({K} members, method {pareto.method!r}) has a J_SF (NaN: "
                          "the set was evaluated without static points); evaluate it at static points "
                          "(ParetoSet.from_thetas(..., static=points))")
+    if needs_jsf:
+        _check_in_float_range(pareto, what, ok)
     if needs_jsf:  # the rules that rank J_SF rank (or break its ties by) J_S: a member not computed is not skipped
         for nm, v in (("J_S", pareto.JS), ("J_SF", pareto.JSF)):
             nan = np.flatnonzero(np.isnan(v) & ok)
@@ -144,6 +147,24 @@ def check_choosable(pareto: ParetoSet, what: str, needs_jsf: bool = True) -> Non
                                  f"{' …' if nan.size > 5 else ''} of the Pareto set ({K} members, method "
                                  f"{pareto.method!r}) {'have' if nan.size > 1 else 'has'} {nm} NaN (not computed), "
                                  "which no rule can rank: evaluate every member (ParetoSet.from_thetas) or drop it")
+
+
+def _check_in_float_range(pareto: ParetoSet, what: str, ok: np.ndarray) -> None:
+    """``ValueError`` naming ``what`` when the set's output (its fitting records') is so large or small that a J of 0
+    or inf may be a mean square beyond the float range (output units²), not a perfect or a diverged member: at
+    y × 2^±700 every J read so, and a rule chose among them without a word."""
+    tops = [float(np.max(np.abs(r.y), initial=0.0)) for r in pareto.fitted_on if isinstance(r, Record)]
+    e = binary_exponent(max(tops, default=0.0))
+    if abs(2 * e) < 1000:  # y² and its mean squares stay well inside the float range (2^±1022)
+        return
+    for nm, v in (("J_S", pareto.JS), ("J_SF", pareto.JSF)):
+        off = np.flatnonzero(ok & ((v == 0) | np.isinf(v)))
+        if off.size:
+            i = int(off[0])
+            raise ValueError(f"{what}: member {i}'s {nm} is {v[i]:g} on an output whose samples reach 2^{e}: its "
+                             f"mean squares (output units², about 2^{2 * e} times a relative error's square) are "
+                             "beyond the float range in these units, so 0 or inf says nothing of the member; express "
+                             "the output in other units (a power of ten or two nearer 1) and fit again")
 
 
 def min_jsf_index(pareto: ParetoSet, what: str = "min J_SF", js: np.ndarray | None = None,

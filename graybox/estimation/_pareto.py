@@ -8,7 +8,7 @@ same definitions as Table I.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Mapping, Sequence
 
 import numpy as np
@@ -19,6 +19,7 @@ from ..models._coerce import as_structure
 from ..models._model import Model, model_input_names
 from ..core._records import (Dataset, Record, RecordPrint, StaticPoints, as_records, carried_from, check_fitted_on,
                              check_units)
+from ..core._least_squares import binary_scaled
 from ..core._validation import (Relocked, FrozenMap, check_bool, check_fields, check_int, check_mean_square, check_real,
                                 check_weight, float_array, frozen, real_array)
 from ..core._terms import Structure
@@ -63,6 +64,22 @@ def nondominated_mask(points: np.ndarray) -> np.ndarray:
         lt = np.any(P[i] < P, axis=1)
         keep &= ~(le & lt)
     return keep
+
+
+def scaled_theta(theta: np.ndarray, structure: Structure, exps: Mapping[str, int]) -> np.ndarray:
+    """θ (rows) on the signals times 2^-e (:func:`~graybox.core._least_squares.binary_scaled`), the inverse of
+    :func:`~graybox.core._least_squares.unscaled_theta`: each term's parameter times 2^(Σ p e_s − e_y)."""
+    shift = np.array([sum(p * exps.get(s, 0) for s, _, p in t.factors) - exps["y"] for t in structure], dtype=int)
+    with np.errstate(over="ignore", under="ignore"):
+        return np.ldexp(np.asarray(theta, float), shift)
+
+
+def scaled_points(points: StaticPoints, exps: Mapping[str, int]) -> StaticPoints:
+    """Static points on the signals times 2^-e (as :func:`scaled_theta`'s): ȳ by y's exponent, ū by its input's."""
+    ub = np.asarray(points.ubar, float)
+    names = [n for n in exps if n not in ("y", "e")]
+    d = exps[names[0]] if ub.ndim == 1 else np.array([exps[n] for n in points.input_names])
+    return replace(points, ubar=np.ldexp(ub, -d), ybar=np.ldexp(np.asarray(points.ybar, float), -exps["y"]))
 
 
 def _failures(method: object, extra: object, failures: object, K: int) -> dict[int, str]:
@@ -241,6 +258,12 @@ class ParetoSet(Relocked):
             run_recs = centred_data(recs, centred[1], keep=frozenset(centred[1]))  # each signal less its offset
             run_static = None if static is None else centred_points(static, centred[1])
         L = structure.max_lag
+        # on the signals times powers of two (exact) where squares of the output's could leave the float range: the
+        # J's (output units²) are then mapped back
+        run_recs, exps = binary_scaled(list(run_recs), structure)
+        if exps:
+            run = scaled_theta(run, structure, exps)
+            run_static = None if run_static is None else scaled_points(run_static, exps)
         j1 = np.zeros(K)
         js = np.zeros(K)
         total = 0
@@ -252,9 +275,13 @@ class ParetoSet(Relocked):
                 js += w * ev["JS"]
             total += w
         jsf = np.full(K, np.nan) if static is None else evaluate_thetas(structure, run, None, run_static)["JSF"]
+        j = {"J1": j1 / total, "JS": js / total, "JSF": jsf}
+        if exps:  # output units²: inf or 0 where beyond the float range, as y² there (the decision rules refuse them)
+            with np.errstate(over="ignore", under="ignore"):
+                j = {nm: np.ldexp(v, 2 * exps["y"]) for nm, v in j.items()}
         lam = np.full(K, np.nan) if lambdas is None else np.asarray(lambdas, float)
         th[bad] = np.nan
-        return cls(structure, th, lam, j1 / total, js / total, jsf, method, extra or {}, fails,
+        return cls(structure, th, lam, j["J1"], j["JS"], j["JSF"], method, extra or {}, fails,
                    **carried_from(recs, static), fitted_on=tuple(recs))
 
     def check_record(self, record: Record) -> None:
