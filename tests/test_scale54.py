@@ -295,3 +295,34 @@ def test_cls_refuses_a_parameter_below_the_float_range_naming_the_term():
         warnings.simplefilter("error")
         with pytest.raises(ValueError, match=r"the parameter\(s\) of \['u\(k-1\)\^2'\] are beyond the float range"):
             gb.cls(TERMS, gb.Record(np.ldexp(u, 300), np.ldexp(y, -600)))
+
+
+@pytest.mark.parametrize("ku", [-400, -300, 400])
+def test_uncertainty_names_the_term_whose_variance_leaves_the_float_range(ku):
+    # u × 2^-300: u(k-1)²'s θ about 2^600, its standard deviation about 2^589 (a float) and its variance about 2^1178
+    # (none): cls_uncertainty warned 'divide by zero' (an error here) or said "cov has non-finite entries at [[3, 3]]",
+    # and at u × 2^400 (a variance about 2^-1622, 0) "cov is no covariance"; at u × 2^-200 it is the ordinary units'
+    u, y = _plant()
+    rec, pts = gb.Record(np.ldexp(u, ku), y), _qp_points(0, ku)
+    said = r"the variance of the parameter of u\(k-1\)\^2 .*beyond the float range in these units.*rescale"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ValueError, match="^cls_uncertainty: " + said):
+            gb.cls_uncertainty(gb.cls(_QP_TERMS, rec, pts, how="points").model, rec, pts, how="points")
+        with pytest.raises(ValueError, match="^ls_uncertainty: " + said):
+            gb.ls_uncertainty(gb.els(_QP_TERMS, rec, noise=0).model, rec)
+        member = gb.pe_pareto(_QP_TERMS, rec, pts, lambdas=[0.5]).models()[0]
+        with pytest.raises(ValueError, match="^pe_uncertainty: " + said):
+            gb.pe_uncertainty(member, rec, pts, lambda1=0.5)
+
+
+def test_uncertainty_on_a_small_input_is_the_ordinary_units_one_scaled():
+    u, y = _plant()
+    base = gb.cls_uncertainty(gb.cls(_QP_TERMS, gb.Record(u, y), _qp_points(0, 0), how="points").model,
+                              gb.Record(u, y), _qp_points(0, 0), how="points")
+    rec, pts = gb.Record(np.ldexp(u, -200), y), _qp_points(0, -200)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        far = gb.cls_uncertainty(gb.cls(_QP_TERMS, rec, pts, how="points").model, rec, pts, how="points")
+    want = _powers_of_two(np.sqrt(np.diag(base.cov)), _QP_TERMS, 0, -200)
+    np.testing.assert_allclose(np.sqrt(np.diag(far.cov))[1:], want[1:], rtol=1e-6)

@@ -64,7 +64,7 @@ from ..static._surfaces import StaticSurface
 from ..estimation._decisions import Decision
 from ..models._coerce import as_model, records_of, static_info, static_points
 from ..models._model import Model
-from ..core._least_squares import check_rows, one_blas_thread, rank_tolerance
+from ..core._least_squares import binary_exponent, check_rows, one_blas_thread, rank_tolerance, scaled_norms
 from ..core._simulation_kernels import free_run_sensitivity_blocks, inverse_ma_filter
 from ..core._terms import Structure, check_input_names
 from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, check_units, require_lengths
@@ -529,8 +529,38 @@ def _check_variance_units(y_scale: float, what: str) -> None:
 
 
 def _to_theta(cov_z: tuple[np.ndarray, np.ndarray], s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Covariance and its factor in z = s ⊙ θ → in θ."""
-    return cov_z[0] / np.outer(s, s), cov_z[1] / s
+    """Covariance and its factor in z = s ⊙ θ → in θ (one scale at a time: s_i s_j of a column of 2^-800 was 0, of
+    2^600 inf, where the entry is a float; an entry beyond the float range is refused, named,
+    by :func:`_refuse_beyond_float_range`)."""
+    with np.errstate(over="ignore", under="ignore", divide="ignore", invalid="ignore"):
+        return cov_z[0] / s[:, None] / s[None, :], cov_z[1] / s
+
+
+def _factor_cov(F: np.ndarray) -> np.ndarray:
+    """FᵀF, each column of F over the power of two above its largest |entry| (exact) and mapped back: a column of
+    a parameter's standard deviation about 2^600 overflowed in the product (an entry beyond the float range there is
+    refused, named, by :func:`_refuse_beyond_float_range`)."""
+    e = binary_exponent(np.max(np.abs(F), axis=0, initial=0.0))
+    Fs = np.ldexp(F, -e)
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        return np.ldexp(Fs.T @ Fs, e[:, None] + e[None, :])
+
+
+def _refuse_beyond_float_range(F: np.ndarray, terms: Sequence, what: str) -> None:
+    """``ValueError`` naming the terms whose parameter's variance (the square of its standard deviation, F's column
+    norm, in the parameter's units²) is no float in these units: at u × 2^-300 u(k-1)²'s standard deviation is about
+    2^589 and its variance 2^1178 (inf), at u × 2^400 about 2^-1622 (0: the parameter known exactly); a subnormal of
+    fewer than 30 bits counts as none."""
+    sd = scaled_norms(np.asarray(F, float), axis=0)
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        var = sd * sd
+    far = np.flatnonzero((sd > 0) & ~(np.isfinite(var) & (var >= np.ldexp(np.finfo(float).tiny, -22))))
+    if far.size:
+        names = ", ".join(str(terms[j]) if j < len(terms) else f"noise parameter {j - len(terms)}" for j in far)
+        k = int(binary_exponent(sd[far[0]])) if np.isfinite(sd[far[0]]) else None
+        about = f" (a standard deviation about 2^{k}, a variance about 2^{2 * k})" if k is not None else ""
+        raise ValueError(f"{what}: the variance of the parameter of {names}{about} is beyond the float range in "
+                         "these units: rescale the signals (other units) and estimate again")
 
 
 def _check_stationary(Z: np.ndarray, A: np.ndarray, r: np.ndarray, rest2: float, size: float, what: str,
@@ -759,8 +789,10 @@ def ls_uncertainty(
                       "data); a run stopped at a loose tol, e.g. 0.1, is short of its fixed point too)",
                       N, rtol=ELS_STATIONARY_RTOL, z_round=None if z_round is None else z_round * s)
     if Afull is not None:  # back to the raw parameters, from the mapped factor (as _FitCoordinates.back)
-        F = F @ Afull.T
-        cov = F.T @ F
+        with np.errstate(over="ignore", invalid="ignore"):
+            F = F @ Afull.T
+        cov = _factor_cov(F)
+    _refuse_beyond_float_range(F, [*st, *ns], what)
     return ParameterUncertainty(model, cov[:n, :n], level, dof, sigma2, "ELS", np.zeros((0, n)), cov[n:, n:],
                                 cov_factor=F[:, :n])
 
@@ -788,6 +820,7 @@ def _ls_uncertainty(model: Model, recs: list[Record], level: float) -> Parameter
                       "noise to zero): refit it with graybox.els(model.structure, data)", d.N, z=z,
                       z_round=None if fc.round is None else fc.round * d.s)
     cov, F, _ = fc.back(cov, F, np.zeros((0, n)))
+    _refuse_beyond_float_range(F, st, what)
     return ParameterUncertainty(model, cov, level, dof, sigma2, "LS", np.zeros((0, n)), np.zeros((0, 0)),
                                 cov_factor=F)
 
@@ -874,8 +907,9 @@ class _FitCoordinates:
             return cov, F, rows
         # the covariance from the mapped factor (FᵀF): A cov Aᵀ held a pinned direction's round-off (1e-24 where FᵀF
         # has 1e-37), and the pair was refused as no covariance and its factor
-        F = F @ self.d.A.T
-        return F.T @ F, F, rows @ self.Ainv
+        with np.errstate(over="ignore", invalid="ignore"):
+            F = F @ self.d.A.T
+        return _factor_cov(F), F, rows @ self.Ainv
 
 
 # --------------------------------------------------------------------------------------------
@@ -977,6 +1011,7 @@ def cls_uncertainty(
                       "pass the CLS estimate with the data, static information and constraints it was estimated with",
                       d.N, z=z, z_round=None if fc.round is None else fc.round * d.s)
     cov, F, A = fc.back(cov, F, A)
+    _refuse_beyond_float_range(F, st, "cls_uncertainty")
     return ParameterUncertainty(model, cov, level, dof, sigma2, "CLS", A, np.zeros((0, 0)), cov_factor=F)
 
 
@@ -1082,6 +1117,7 @@ def pe_uncertainty(
     G = np.vstack([w1 * np.sqrt(sigma2) * d.R1, w2 * np.sqrt(ss2) * B])  # M = GᵀG
     cov, F = _to_theta(_sandwich(Z, A2, G, "pe_uncertainty", d.N + M), d.s)
     cov, F, A = fc.back(cov, F, A)
+    _refuse_beyond_float_range(F, st, "pe_uncertainty")
     return ParameterUncertainty(m, cov, level, d.N - (n - r), sigma2, f"PE λ1={lam:.4g}", A, np.zeros((0, 0)), ss2,
                                 cov_factor=F)
 
@@ -1261,8 +1297,10 @@ def se_uncertainty(
     if problem.z_map is None:
         cov, F = _to_theta((cov_z, F), problem.scale)
     else:  # θ = z_map z + z_shift; the covariance from the mapped factor, as for CLS and PE (:class:`_FitCoordinates`)
-        F = F @ problem.z_map.T
-        cov = F.T @ F
+        with np.errstate(over="ignore", invalid="ignore"):
+            F = F @ problem.z_map.T
+        cov = _factor_cov(F)
+    _refuse_beyond_float_range(F, m.structure, "se_uncertainty")
     return ParameterUncertainty(m, cov, level, nd - n, sigma2, f"SE λ1={lam:.4g}", np.zeros((0, n)),
                                 np.zeros((0, 0)), ss2, cov_factor=F)
 
