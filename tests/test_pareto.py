@@ -239,3 +239,22 @@ def test_members_js_beyond_the_float_range_are_refused_by_the_decision_rules(e, 
     said = rf"decide_dsf: member 0's J_S is {reads} .*2\^{e + 1}.*beyond the float range"
     with pytest.raises(ValueError, match=said):
         decide_dsf(far, band=1.0, fallback="min_jsf")
+
+
+def test_choosing_records_at_a_huge_output_score_the_members_not_divergence():
+    """At y × 2^512 D_SF on a validation record said every member diverged there (the samples times J_S, about
+    2^1018, overflowed); it chooses as in ordinary units, its score the ordinary one times 2^1024."""
+    import graybox as gb
+
+    u, y = first_order_signals(400, 0, noise=0.1)
+    st = gb.parse_structure(["y(k-1)", "u(k-1)"])
+    ub = np.array([-0.5, 0.0, 0.5])
+    decisions = []
+    for e in (0, 512):
+        s = 2.0**e
+        ident, valid = (Record(u[k:k + 200], y[k:k + 200] * s, Ts=1.0, name=n) for k, n in ((0, "i"), (200, "v")))
+        ps = ParetoSet.from_thetas(st, np.array([[0.5, 1.0], [0.45, 1.1]]) * [1, s], [0.5, 0.7], ident,
+                                   gb.StaticPoints(ub, (2 * ub + 0.01) * s))
+        decisions.append(gb.decide_dsf(ps, band=float(np.ldexp(1.0, 2 * e - 4)), choose_on=valid))
+    assert decisions[1].index == decisions[0].index
+    assert decisions[1].score == pytest.approx(np.ldexp(decisions[0].score, 1024), rel=1e-12)

@@ -19,10 +19,9 @@ from typing import Sequence
 
 import numpy as np
 
-from ..models._evaluate import evaluate_thetas
 from ..models._coerce import as_record
 from ..models._model import Model
-from ._pareto import ParetoSet
+from ._pareto import ParetoSet, members_js
 from ..core._records import (Record, RecordPrint, check_overlap, check_print_overlap, choosing_records, require_lengths,
                              same_record)
 from ..core._least_squares import binary_exponent
@@ -225,16 +224,8 @@ def choosing_js(pareto: ParetoSet, records: Record | Sequence[Record]) -> np.nda
                 raise ValueError(f"choose_on: the choosing record {c.name!r} is a fitting record ({f.name!r}): {advice}")
             check_overlap(c, f, "choosing", "fitting", advice, prefix="choose_on: ")
     th = np.where(np.isfinite(pareto.thetas), pareto.thetas, 0.0)
-    L = pareto.structure.max_lag
-    total = np.zeros(len(pareto))
-    count = 0
-    require_lengths(recs, L)
-    for r in recs:
-        w = len(r) - L
-        with np.errstate(invalid="ignore", over="ignore"):
-            total += w * evaluate_thetas(pareto.structure, th, r, None, one_step=False)["JS"]
-        count += w
-    out = total / count
+    require_lengths(recs, pareto.structure.max_lag)
+    out = members_js(pareto.structure, th, recs, one_step=False)["JS"]
     out[list(pareto.failures)] = np.inf
     out = np.where(np.isfinite(out), out, np.inf)
     # the set's own J_S is on the records it was fitted on: where every member scores the choosing records as that

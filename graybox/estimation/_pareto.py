@@ -82,6 +82,38 @@ def scaled_points(points: StaticPoints, exps: Mapping[str, int]) -> StaticPoints
     return replace(points, ubar=np.ldexp(ub, -d), ybar=np.ldexp(np.asarray(points.ybar, float), -exps["y"]))
 
 
+def members_js(structure: Structure, thetas: np.ndarray, records: Sequence[Record], static: StaticPoints | None = None,
+               *, one_step: bool = True, threads: int = 1) -> dict[str, np.ndarray]:
+    """J_1 (with ``one_step``) and J_S, the sample-weighted means over ``records`` (each from its own max-lag on), and
+    J_SF at ``static`` (NaN without), of each row of ``thetas``, output units², shape (P,) each.
+
+    Evaluated on the signals times powers of two (exact) where squares of the output's could leave the float range,
+    and mapped back: at y × 2^512 the samples times J_S (about 2^1018) overflowed, and every member read diverged.
+    inf or 0 where a J itself is beyond the float range, as y² there (the decision rules refuse them)."""
+    L = structure.max_lag
+    P = np.atleast_2d(thetas).shape[0]
+    recs, exps = binary_scaled(list(records), structure)
+    if exps:
+        thetas = scaled_theta(thetas, structure, exps)
+        static = None if static is None else scaled_points(static, exps)
+    j1, js = np.zeros(P), np.zeros(P)
+    total = 0
+    for r in recs:
+        ev = evaluate_thetas(structure, thetas, r, None, one_step=one_step, threads=threads)
+        w = len(r) - L
+        with np.errstate(invalid="ignore", over="ignore"):
+            if one_step:
+                j1 += w * ev["J1"]
+            js += w * ev["JS"]
+        total += w
+    out = {"J1": j1 / total, "JS": js / total} if one_step else {"JS": js / total}
+    out["JSF"] = np.full(P, np.nan) if static is None else evaluate_thetas(structure, thetas, None, static)["JSF"]
+    if exps:
+        with np.errstate(over="ignore", under="ignore"):
+            out = {nm: np.ldexp(v, 2 * exps["y"]) for nm, v in out.items()}
+    return out
+
+
 def _failures(method: object, extra: object, failures: object, K: int) -> dict[int, str]:
     """The failed members as {index: reason}, after checking the set's descriptive fields' types."""
     if not isinstance(method, str):
@@ -257,28 +289,7 @@ class ParetoSet(Relocked):
                 raise ValueError(f"centred offsets must name y and every input of the records; missing {missing}")
             run_recs = centred_data(recs, centred[1], keep=frozenset(centred[1]))  # each signal less its offset
             run_static = None if static is None else centred_points(static, centred[1])
-        L = structure.max_lag
-        # on the signals times powers of two (exact) where squares of the output's could leave the float range: the
-        # J's (output units²) are then mapped back
-        run_recs, exps = binary_scaled(list(run_recs), structure)
-        if exps:
-            run = scaled_theta(run, structure, exps)
-            run_static = None if run_static is None else scaled_points(run_static, exps)
-        j1 = np.zeros(K)
-        js = np.zeros(K)
-        total = 0
-        for r in run_recs:
-            ev = evaluate_thetas(structure, run, r, None, one_step=True, threads=threads)
-            w = len(r) - L
-            j1 += w * ev["J1"]
-            with np.errstate(invalid="ignore"):
-                js += w * ev["JS"]
-            total += w
-        jsf = np.full(K, np.nan) if static is None else evaluate_thetas(structure, run, None, run_static)["JSF"]
-        j = {"J1": j1 / total, "JS": js / total, "JSF": jsf}
-        if exps:  # output units²: inf or 0 where beyond the float range, as y² there (the decision rules refuse them)
-            with np.errstate(over="ignore", under="ignore"):
-                j = {nm: np.ldexp(v, 2 * exps["y"]) for nm, v in j.items()}
+        j = members_js(structure, run, run_recs, run_static, threads=threads)
         lam = np.full(K, np.nan) if lambdas is None else np.asarray(lambdas, float)
         th[bad] = np.nan
         return cls(structure, th, lam, j["J1"], j["JS"], j["JSF"], method, extra or {}, fails,
