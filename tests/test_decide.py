@@ -6,6 +6,7 @@ import pytest
 from graybox import Model, reference
 from graybox.estimation._decisions import decide_dsf
 from graybox.estimation._pareto import ParetoSet
+from conftest import first_order_signals
 
 S15 = reference.STRUCTURE_15
 B = 0.031  # a band for these tests (output units²); decide_dsf has no default
@@ -156,3 +157,22 @@ def test_a_member_of_nan_objective_is_refused_by_index_not_skipped(js, jsf, said
         decide_dsf(ps, band=B)
     with pytest.raises(ValueError, match=said):
         decide_dsf(front([5.0, *js[1:]], jsf), band=1e-9, fallback="min_jsf")
+
+
+@pytest.mark.parametrize("e", [300, 600, -300, -600])
+def test_min_correlation_has_no_units(e):
+    """ρ is units-free: at y × 2^300 every member's ρ read 0 (the product of the sums of squares, about 2^1200,
+    overflowed), at 2^±600 and 2^-300 every member was refused as on 'a record that does not move'."""
+    import graybox as gb
+
+    u, y = first_order_signals(400, 0, noise=0.1)
+    st = gb.parse_structure(["y(k-1)", "u(k-1)"])
+    th = np.array([[0.5, 1.0], [0.45, 1.1], [0.3, 0.9]])
+    out = []
+    for k in (0, e):
+        s = 2.0**k
+        ps = ParetoSet.from_thetas(st, th * [1, s], [0.5, 0.7, 0.9], gb.Record(u[:200], y[:200] * s, Ts=1.0), None)
+        valid = gb.Record(u[200:], y[200:] * s, Ts=1.0)
+        out.append([gb.decide_min_correlation(ps, valid, output=o) for o in ("one-step", "free-run")])
+    for base, far in zip(*out):
+        assert far.index == base.index and far.score == pytest.approx(base.score, rel=1e-12) and base.score > 0.01

@@ -383,6 +383,10 @@ def decide_min_correlation(
         with np.errstate(all="ignore"):
             xc = xi - xi.mean(axis=0)
             oc = Yo - Yo.mean(axis=0)
+            # ρ has no units: each column over the power of two above its largest |entry| (exact), where the product
+            # of the sums of squares (output units⁴) left the float range at y × 2^±260 (ρ read 0, or undefined)
+            xc = np.ldexp(xc, -binary_exponent(np.max(np.abs(xc), axis=0, initial=0.0)))
+            oc = np.ldexp(oc, -binary_exponent(np.max(np.abs(oc), axis=0, initial=0.0)))
             r = np.abs(np.sum(xc * oc, axis=0)) / np.sqrt(np.sum(xc**2, axis=0) * np.sum(oc**2, axis=0))
         diverged[k0 : k0 + step] = ~np.all(np.isfinite(Yo), axis=0)
         rho[k0 : k0 + step] = np.where(np.isfinite(r) & ~diverged[k0 : k0 + step], r, np.inf)
