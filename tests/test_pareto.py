@@ -258,3 +258,26 @@ def test_choosing_records_at_a_huge_output_score_the_members_not_divergence():
         decisions.append(gb.decide_dsf(ps, band=float(np.ldexp(1.0, 2 * e - 4)), choose_on=valid))
     assert decisions[1].index == decisions[0].index
     assert decisions[1].score == pytest.approx(np.ldexp(decisions[0].score, 1024), rel=1e-12)
+
+
+def test_a_grid_cells_members_on_a_huge_output_keep_their_validation_figures():
+    """A grid cell's members at y × 2^512: every member's validation J_S read inf and its fit % -inf (the
+    samples' squares overflowed); they are the ordinary units' (J_S times 2^1024, fit % the same), and gb.mse too."""
+    import graybox as gb
+    from graybox.experiments._cell import _members
+
+    u, y = first_order_signals(400, 0, noise=0.1)
+    st = gb.parse_structure(["y(k-1)", "u(k-1)"])
+    ub = np.array([-0.5, 0.0, 0.5])
+    got = []
+    for e in (0, 512):
+        s = 2.0**e
+        ident, valid = Record(u[:200], y[:200] * s, Ts=1.0), Record(u[200:], y[200:] * s, Ts=1.0)
+        pts = gb.StaticPoints(ub, (2 * ub + 0.01) * s)
+        ps = ParetoSet.from_thetas(st, np.array([[0.5, 1.0], [0.45, 1.1]]) * [1, s], [0.5, 0.7], ident, pts)
+        got.append(_members(ps, gb.Dataset(ident, valid, pts)))
+        got[-1]["mse"] = gb.mse(valid.y, gb.Model(st, ps.thetas[0]).simulate(valid), start=1)
+    np.testing.assert_allclose(got[1]["JS_valid"], np.ldexp(got[0]["JS_valid"], 1024), rtol=1e-12)
+    np.testing.assert_allclose(got[1]["fit_valid"], got[0]["fit_valid"], rtol=1e-12)
+    assert got[1]["mse"] == pytest.approx(np.ldexp(got[0]["mse"], 1024), rel=1e-12)
+    assert got[0]["mse"] == pytest.approx(got[0]["JS_valid"][0], rel=1e-12)

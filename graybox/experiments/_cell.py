@@ -23,6 +23,7 @@ from .. import _api as gb
 
 from ..static._constraints import static_cluster_map
 from ..estimation._decisions import min_jsf_index
+from ..estimation._pareto import members_js
 from ..estimation._prediction_error import numerator_surface
 from ..core._least_squares import thread_pools
 from ..core._validation import check_int
@@ -218,13 +219,15 @@ def _members(pareto: gb.ParetoSet, data: gb.Dataset) -> dict[str, Any]:
     ok = np.array([i not in pareto.failures for i in range(K)], bool)
     js_valid = np.full(K, np.inf)
     if ok.any():
-        js_valid[ok] = gb.evaluate_thetas(pareto.structure, pareto.thetas[ok], data.valid, one_step=False)["JS"]
+        # on the signals times powers of two where squares of the output's leave the float range (at y × 2^512
+        # every member's J_S read inf)
+        js_valid[ok] = members_js(pareto.structure, pareto.thetas[ok], [data.valid], one_step=False)["JS"]
     # fit % from J_S as gb.fit_percent defines it: 100 (1 − ‖y − ŷ‖ / ‖y − mean(y)‖) from sample L on;
     # NaN where a held (constant) validation output leaves it undefined
     y = data.valid.y[pareto.structure.max_lag:]
     spread = output_spread(y)
-    with np.errstate(invalid="ignore"):
-        fit = 100.0 * (1.0 - np.sqrt(js_valid * y.size) / spread) if spread > 0 else np.full(K, np.nan)
+    with np.errstate(invalid="ignore"):  # √J_S √N: J_S N overflowed where ‖y − ŷ‖ is a float
+        fit = 100.0 * (1.0 - np.sqrt(js_valid) * np.sqrt(y.size) / spread) if spread > 0 else np.full(K, np.nan)
     figures = {"lambda1": pareto.lambdas, "J1": pareto.J1, "JS": pareto.JS, "JSF": pareto.JSF, "JS_valid": js_valid,
                "fit_valid": fit}
     out: dict[str, Any] = {k: np.array(v, dtype=np.float64) for k, v in figures.items()}  # copies, own memory

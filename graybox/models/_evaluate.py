@@ -24,7 +24,7 @@ from typing import Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from ..core._least_squares import CONSTANT_RTOL, output_spread, scaled_norm  # noqa: F401 (their home is core)
+from ..core._least_squares import CONSTANT_RTOL, mean_square, output_spread, scaled_norm  # noqa: F401 (home: core)
 from ..core._simulation_kernels import batch_sse, encode, record_inputs
 from ._model import Model
 from ._coerce import as_model, as_record, as_structure, static_info
@@ -63,7 +63,9 @@ def mse(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
         e = y - yhat
         if not np.all(np.isfinite(e)):
             return float("inf")
-        return float(np.mean(e**2))
+    # over the power of two above max|e| (exact): errors about 2^512 overflowed when squared, where their mean square
+    # (about 2^1018) is a float
+    return float(mean_square(e))
 
 
 def j1(model: Model, record: Record | Dataset) -> float:
