@@ -127,10 +127,32 @@ def test_import_graybox_loads_no_heavy_dependency():
     import subprocess
     import sys
 
-    code = ("import sys, graybox; heavy = [m for m in ('numba', 'cvxpy', 'pandas', 'matplotlib', 'scipy', 'dask')"
-            " if m in sys.modules]; print(','.join(heavy))")
+    code = ("import sys, graybox; heavy = [m for m in ('numba', 'cvxpy', 'pandas', 'matplotlib', 'scipy', 'dask', "
+            "'distributed', 'control') if m in sys.modules]; print(','.join(heavy))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
     assert out == "", f"import graybox loaded {out}"
+
+
+#: Slow to import and wanted by few calls (scipy.signal alone about half a second): below the figures and the
+#: experiments they are imported inside the function that uses them, so that a name such as ``gb.save`` or
+#: ``gb.local_model`` (whose module imports the saved types and the layers under it) does not load them all.
+WHERE_USED = ("scipy.signal", "scipy.stats", "scipy.optimize", "control", "cvxpy", "matplotlib", "dask",
+              "distributed")
+LAYERS_BELOW_FIGURES = UNITS[:UNITS.index("plots")]
+
+
+@pytest.mark.parametrize("path", [p for p in sorted(PKG.rglob("*.py")) if _rel(p)[0] in LAYERS_BELOW_FIGURES],
+                         ids=lambda p: str(p.relative_to(PKG)))
+def test_slow_dependencies_load_where_used(path):
+    """No module below the figures imports a slow, rarely needed dependency when it is itself imported."""
+    top = []
+    for node in ast.parse(path.read_text(encoding="utf-8")).body:  # module level only, not inside a function
+        if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            top += [node.module, *(f"{node.module}.{a.name}" for a in node.names)]
+        elif isinstance(node, ast.Import):
+            top += [a.name for a in node.names]
+    bad = sorted({m for m in top for h in WHERE_USED if m == h or m.startswith(h + ".")})
+    assert not bad, f"{path.relative_to(PKG)} imports {bad} at module level"
 
 
 def test_every_public_name_resolves():

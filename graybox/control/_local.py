@@ -27,7 +27,6 @@ from dataclasses import dataclass
 from typing import Any, ClassVar, Sequence
 
 import numpy as np
-from scipy.signal import lfilter
 
 from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, as_records, check_same_units, check_units, frame_inputs, labelled_point, outside_range,
                               rounded_levels, static_point_inputs)
@@ -73,6 +72,7 @@ def _step_error(num: np.ndarray, den: np.ndarray, g: float, band: float, n: int,
     zi = np.zeros(max(len(num), len(den)) - 1)
     last, early, late, peak = 0, 0.0, 0.0, 0.0
     mid = n - tail // 2
+    from scipy.signal import lfilter  # slow to import: loaded where used
     for k0 in range(0, n, block):
         k1 = min(n, k0 + block)
         s, zi = lfilter(num, den, np.ones(k1 - k0), zi=zi)
@@ -379,6 +379,7 @@ class LocalModel(Relocked):
         self._need()
         n = check_count(n_samples, "n_samples", low=1)
         b = np.concatenate([[0.0], self.b[self._input_index(input)]])
+        from scipy.signal import lfilter  # slow to import: loaded where used
         return lfilter(b, np.concatenate([[1.0], -self.a]), np.ones(n))
 
     def frequency_response(self, omega: np.ndarray, input: int | str = 0) -> np.ndarray:

@@ -71,7 +71,6 @@ from typing import Mapping, Sequence
 
 import numpy as np
 import pandas as pd
-from scipy import stats
 
 from ..models._coerce import MODEL_ACCEPTED, as_model, records_of
 from ..models._model import Model
@@ -261,6 +260,7 @@ class ResidualTests(Relocked):
         tops = {k: int(np.max(np.abs(t.lags))) for k, t in self.tests.items()}
         if len(set(tops.values())) > 1:
             raise ValueError(f"lags of the tests must reach one max_lag, as residual_tests makes them; got {tops}")
+        from scipy import stats  # slow to import: loaded where used
         band = float(stats.norm.ppf(0.5 + self.level / 2) / np.sqrt(self.n))
         for k, t in self.tests.items():
             check_agrees(t.band, band, f"band of tests[{k!r}]", f"level = {self.level!r} and n = {self.n} (z/√n)")
@@ -552,6 +552,7 @@ def residual_tests(
     if undefined:
         warn(f"residual_tests: {len(undefined)} test(s) undefined on these data, left out: "
              + "; ".join(f"{k} ({why})" for k, why in undefined.items()), UserWarning)
+    from scipy import stats  # slow to import: loaded where used
     z = stats.norm.ppf(0.5 + level / 2)
     if rule == "simultaneous" and not np.isfinite(stats.norm.ppf(1 - (1 - level) / (2 * (2 * max_lag + 1)))):
         raise ValueError(f"level = {level!r} is too close to 1 for the simultaneous rule over {2 * max_lag + 1} lags: "

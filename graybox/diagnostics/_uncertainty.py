@@ -54,7 +54,6 @@ from typing import Iterable, Sequence
 import numpy as np
 import pandas as pd
 import scipy.linalg
-from scipy import stats
 
 from ..static._constraints import StaticConstraint, static_cluster_map, static_rows
 from ..estimation._prediction_error import (_centred_affine, _centred_context, _cls_setup, _data, _Data, _dynamic,
@@ -259,6 +258,7 @@ class ParameterUncertainty(Relocked):
     @property
     def quantile(self) -> float:
         """Student's t quantile of the two-sided interval at :attr:`level` with :attr:`dof`."""
+        from scipy import stats  # slow to import: loaded where used
         return float(stats.t.ppf(0.5 + self.level / 2, self.dof))
 
     @property

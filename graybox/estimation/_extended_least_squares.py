@@ -81,7 +81,6 @@ from typing import Sequence
 import numpy as np
 
 from scipy.linalg import solve_triangular
-from scipy.optimize import least_squares
 
 from ..core._simulation_kernels import inverse_ma_filter
 from ..core._least_squares import (binary_scaled, check_identified, check_rows, column_scales, free_directions,
@@ -324,6 +323,7 @@ class _DirectMA:
 
     def solve(self, c: np.ndarray, max_nfev: int) -> np.ndarray | None:
         """Residuals ξ at a root of h found from the starts, or None when none is found."""
+        from scipy.optimize import least_squares  # slow to import: loaded where used
         for c0 in self.starts(c):
             left = int(max_nfev) - self.nfev
             if left < 10:

@@ -126,7 +126,6 @@ from typing import Literal, Sequence
 
 import numba as nb
 import numpy as np
-from scipy.optimize import brentq
 
 from ..core._least_squares import output_spread
 from ..core._records import (Dataset, Record, as_records, carried_from, check_fitted_on, check_units, require_lengths,
@@ -673,6 +672,7 @@ class NeuralModel(Relocked):
             f = F(grid)
             roots = [float(v) for v in grid[f == 0.0]]
             idx = np.flatnonzero((f[:-1] * f[1:]) < 0)
+            from scipy.optimize import brentq  # slow to import: loaded where used
             for i in idx:
                 roots.append(float(brentq(F, grid[i], grid[i + 1], xtol=1e-13, rtol=1e-13, maxiter=200)))
             roots.sort()

@@ -54,7 +54,6 @@ from typing import Any, Callable, Literal, Mapping, Sequence, TypeVar
 
 import numpy as np
 from scipy.linalg.lapack import dgeqrf
-from scipy.optimize import least_squares
 
 from ._prediction_error import identified_by, pe_members, static_matrices
 from ..core._simulation_kernels import (
@@ -1412,6 +1411,7 @@ def _fit(problem: SEProblem, theta0: np.ndarray, lam1: float, solver: str, max_n
     # trf/dogbox bound the gradient Jᵀf, which the scaling divides by s; lm bounds a cosine, unit-free
     gtol = tol if solver == "lm" else max(tol * ys / s, float(np.finfo(float).eps))
     try:
+        from scipy.optimize import least_squares  # slow to import: loaded where used
         with np.errstate(over="ignore", invalid="ignore"):  # inf residuals mark rejected steps
             res = least_squares(lambda x: cp.fun(x * s) / s, problem.to_z(theta0) / s,
                                 jac=lambda x, f=None: cp.jac(x * s), method=solver, x_scale="jac",
