@@ -24,5 +24,5 @@ from ._lazy import attach
 __getattr__, __dir__, _names = attach(
     __name__, {"experiments": ("GrayboxSelection", "SelectionWarning", "load_results", "select_graybox"),
                "_api": _api.__all__},
-    base="graybox", modules=("plots", "experiments", "reproduce"))
-__all__ = sorted([*_names, "__version__"])
+    base="graybox", modules=("plots", "experiments", "reproduce"), present=("__version__",))
+__all__ = _names

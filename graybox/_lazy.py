@@ -13,7 +13,8 @@ from typing import Any
 
 
 def attach(package: str, exports: Mapping[str, Sequence[str]], *, base: str | None = None,
-           modules: Sequence[str] = ()) -> tuple[Callable[[str], Any], Callable[[], list[str]], list[str]]:
+           modules: Sequence[str] = (), present: Sequence[str] = ()
+           ) -> tuple[Callable[[str], Any], Callable[[], list[str]], list[str]]:
     """``__getattr__``, ``__dir__`` and ``__all__`` for a package that re-exports lazily.
 
     Parameters
@@ -27,15 +28,17 @@ def attach(package: str, exports: Mapping[str, Sequence[str]], *, base: str | No
         The package the modules are relative to (default: ``package`` itself).
     modules : sequence of str
         Modules of ``base`` that are themselves public names (``graybox.plots``), loaded on first use.
+    present : sequence of str
+        Public names the package sets itself (``__version__``): listed by ``__dir__`` and ``__all__``, not loaded.
     """
     base = package if base is None else base
     where: dict[str, str] = {}
     for module, names_there in exports.items():
         for name in names_there:
-            if name in where or name in modules:
+            if name in where or name in modules or name in present:
                 raise RuntimeError(f"{package}: {name} is exported twice ({where.get(name, name)} and {module})")
             where[name] = module
-    names = sorted([*where, *modules])
+    names = sorted([*where, *modules, *present])
 
     def __getattr__(name: str) -> Any:
         if name in modules:

@@ -160,5 +160,7 @@ def test_every_public_name_resolves():
 
     for name in gb.__all__:
         assert getattr(gb, name) is not None, name
+    # dir() (tab completion) lists every public name, __version__ included (it was in __all__ only)
+    assert set(gb.__all__) <= set(dir(gb)), set(gb.__all__) - set(dir(gb))
     with pytest.raises(AttributeError, match="module 'graybox' has no attribute 'nope'"):
         gb.nope  # noqa: B018
