@@ -326,3 +326,30 @@ def test_uncertainty_on_a_small_input_is_the_ordinary_units_one_scaled():
         far = gb.cls_uncertainty(gb.cls(_QP_TERMS, rec, pts, how="points").model, rec, pts, how="points")
     want = _powers_of_two(np.sqrt(np.diag(base.cov)), _QP_TERMS, 0, -200)
     np.testing.assert_allclose(np.sqrt(np.diag(far.cov))[1:], want[1:], rtol=1e-6)
+
+
+@pytest.mark.parametrize("ky, ku", [(512, 0), (-480, 0), (300, -200)])
+def test_evaluate_thetas_gives_the_js_of_ordinary_units_near_the_float_ranges_ends(ky, ku):
+    """gb.evaluate_thetas summed squared errors in the data's own units: at y × 2^512 J_1, J_S and J_SF (about
+    2^1012, floats) read inf, the sums of squares (2^1020 and more) overflowing; with a y² term the equilibria did
+    too. Record and static points (or static points alone) now give the J's of ordinary units times 2^(2 ky)."""
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(0.5, 2.0, 30), 10)
+    y = np.zeros(u.size)
+    for k in range(1, u.size):
+        y[k] = 0.5 * y[k - 1] + 0.3 * u[k - 1]
+    y += 0.01 * rng.standard_normal(u.size)
+    s = gb.parse_structure(["y(k-1)", "u(k-1)", "y(k-1)^2"])
+    th = np.array([[0.5, 0.3, 0.01], [0.45, 0.35, 0.0]])
+    ub = np.linspace(0.6, 1.9, 4)
+    base = gb.evaluate_thetas(s, th, gb.Record(u, y), gb.StaticPoints(ub, 0.6 * ub))
+    # the same models on y × 2^ky, u × 2^ku: θ of y(k-1) unchanged, of u(k-1) times 2^(ky − ku), of y² times 2^-ky
+    scaled = np.ldexp(th, np.array([0, ky - ku, -ky]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        got = gb.evaluate_thetas(s, scaled, gb.Record(np.ldexp(u, ku), np.ldexp(y, ky)),
+                                 gb.StaticPoints(np.ldexp(ub, ku), np.ldexp(0.6 * ub, ky)))
+        alone = gb.evaluate_thetas(s, scaled, None, gb.StaticPoints(np.ldexp(ub, ku), np.ldexp(0.6 * ub, ky)))
+    for name in ("J1", "JS", "JSF"):
+        np.testing.assert_allclose(np.ldexp(got[name], -2 * ky), base[name], rtol=1e-9, err_msg=name)
+    np.testing.assert_allclose(np.ldexp(alone["JSF"], -2 * ky), base["JSF"], rtol=1e-9)

@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from contextlib import AbstractContextManager
 from dataclasses import replace
-from typing import Mapping, Sequence
+from typing import TYPE_CHECKING, Mapping, Sequence
 
 import numpy as np
 from threadpoolctl import ThreadpoolController
@@ -18,10 +18,13 @@ from threadpoolctl import ThreadpoolController
 from ._gram import as_gram_records, is_dask_data
 from ._terms import Structure, Term
 
+if TYPE_CHECKING:
+    from ._records import StaticPoints
+
 __all__ = ["column_scales", "scaled_lstsq", "thread_pools", "one_blas_thread", "check_rows", "free_directions",
            "check_identified", "rank_tolerance", "HELD_OUTPUT", "CONSTANT_RTOL", "output_spread", "output_scale",
            "spread_scale", "beyond_float_range", "refuse_beyond_float_range", "refuse_parameter_scales",
-           "binary_scaled", "unscaled_theta", "unscaled_rss", "unscaled_levels", "scaled_norm", "scaled_norms",
+           "binary_scaled", "scaled_theta", "scaled_points", "unscaled_theta", "unscaled_rss", "unscaled_levels", "scaled_norm", "scaled_norms",
            "mean_square", "binary_exponent"]
 
 _CONTROLLER: list[ThreadpoolController] = []
@@ -388,6 +391,22 @@ def unscaled_theta(theta: np.ndarray, terms: Sequence[Term], exps: Mapping[str, 
         out = np.ldexp(theta, np.array([exps["y"] - sum(p * exps.get(s, 0) for s, _, p in t.factors) for t in terms],
                                        dtype=int))
     return np.where((theta != 0) & (np.abs(out) < np.finfo(float).tiny), np.nan, out)
+
+
+def scaled_theta(theta: np.ndarray, structure: Structure, exps: Mapping[str, int]) -> np.ndarray:
+    """θ (rows) on the signals times 2^-e (:func:`binary_scaled`), the inverse of
+    :func:`unscaled_theta`: each term's parameter times 2^(Σ p e_s − e_y)."""
+    shift = np.array([sum(p * exps.get(s, 0) for s, _, p in t.factors) - exps["y"] for t in structure], dtype=int)
+    with np.errstate(over="ignore", under="ignore"):
+        return np.ldexp(np.asarray(theta, float), shift)
+
+
+def scaled_points(points: StaticPoints, exps: Mapping[str, int]) -> StaticPoints:
+    """Static points on the signals times 2^-e (as :func:`scaled_theta`'s): ȳ by y's exponent, ū by its input's."""
+    ub = np.asarray(points.ubar, float)
+    names = [n for n in exps if n not in ("y", "e")]
+    d = exps[names[0]] if ub.ndim == 1 else np.array([exps[n] for n in points.input_names])
+    return replace(points, ubar=np.ldexp(ub, -d), ybar=np.ldexp(np.asarray(points.ybar, float), -exps["y"]))
 
 
 def unscaled_levels(levels: Mapping[str, float], exps: Mapping[str, int]) -> dict[str, float]:

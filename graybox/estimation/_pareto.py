@@ -19,7 +19,7 @@ from ..models._coerce import as_structure
 from ..models._model import Model, model_input_names
 from ..core._records import (Dataset, Record, RecordPrint, StaticPoints, as_records, carried_from, check_fitted_on,
                              check_units)
-from ..core._least_squares import binary_scaled
+from ..core._least_squares import binary_scaled, scaled_points, scaled_theta
 from ..core._validation import (Relocked, FrozenMap, check_bool, check_fields, check_int, check_mean_square, check_real,
                                 check_weight, float_array, frozen, real_array)
 from ..core._terms import Structure
@@ -64,22 +64,6 @@ def nondominated_mask(points: np.ndarray) -> np.ndarray:
         lt = np.any(P[i] < P, axis=1)
         keep &= ~(le & lt)
     return keep
-
-
-def scaled_theta(theta: np.ndarray, structure: Structure, exps: Mapping[str, int]) -> np.ndarray:
-    """θ (rows) on the signals times 2^-e (:func:`~graybox.core._least_squares.binary_scaled`), the inverse of
-    :func:`~graybox.core._least_squares.unscaled_theta`: each term's parameter times 2^(Σ p e_s − e_y)."""
-    shift = np.array([sum(p * exps.get(s, 0) for s, _, p in t.factors) - exps["y"] for t in structure], dtype=int)
-    with np.errstate(over="ignore", under="ignore"):
-        return np.ldexp(np.asarray(theta, float), shift)
-
-
-def scaled_points(points: StaticPoints, exps: Mapping[str, int]) -> StaticPoints:
-    """Static points on the signals times 2^-e (as :func:`scaled_theta`'s): ȳ by y's exponent, ū by its input's."""
-    ub = np.asarray(points.ubar, float)
-    names = [n for n in exps if n not in ("y", "e")]
-    d = exps[names[0]] if ub.ndim == 1 else np.array([exps[n] for n in points.input_names])
-    return replace(points, ubar=np.ldexp(ub, -d), ybar=np.ldexp(np.asarray(points.ybar, float), -exps["y"]))
 
 
 def members_js(structure: Structure, thetas: np.ndarray, records: Sequence[Record], static: StaticPoints | None = None,

@@ -25,6 +25,7 @@ import numpy as np
 import pandas as pd
 
 from ..core._least_squares import CONSTANT_RTOL, mean_square, output_spread, scaled_norm  # noqa: F401 (home: core)
+from ..core._least_squares import binary_scaled, scaled_points, scaled_theta
 from ..core._simulation_kernels import batch_sse, encode, record_inputs
 from ._model import Model
 from ._coerce import as_model, as_record, as_structure, static_info
@@ -280,7 +281,8 @@ def evaluate_thetas(
     -------
     dict
         Keys among ``"J1"``, ``"JS"`` (with ``record``) and ``"JSF"`` (with ``static``), each an
-        ndarray of shape (P,) in output units².
+        ndarray of shape (P,) in output units². Data near the ends of the float range are evaluated on the
+        signals times powers of two (exact) and the J's mapped back: a J beyond the range reads inf or 0.
 
     Raises
     ------
@@ -307,6 +309,16 @@ def evaluate_thetas(
         raise ValueError(f"thetas must have shape (P, {len(structure)}) (one parameter vector per row, one value per "
                          f"term) or ({len(structure)},), got shape {np.shape(thetas)}")
     check_finite_rows(th, "thetas")
+    # signals whose squares (or products of the terms) near the float range's ends: evaluated on the signals times
+    # powers of two (exact) and the J's mapped back, so that they do not depend on the units (at y × 2^512 the sums
+    # of squares, about 2^1027, read inf; with a y² term the equilibria overflowed)
+    probe = record if record is not None else None if static is None else Record(
+        np.asarray(static.ubar, float), np.asarray(static.ybar, float), input_names=static.input_names)
+    scaled, exps = ([probe], {}) if probe is None else binary_scaled([probe], structure)
+    if exps:
+        th = scaled_theta(th, structure, exps)
+        record = None if record is None else scaled[0]
+        static = None if static is None else scaled_points(static, exps)
     out: dict[str, np.ndarray] = {}
     if record is not None:
         L = structure.max_lag
@@ -338,6 +350,9 @@ def evaluate_thetas(
         with np.errstate(over="ignore", invalid="ignore"):
             jsf_ = np.mean((yb - static.ybar[None, :]) ** 2, axis=1)
         out["JSF"] = np.where(np.isfinite(jsf_), jsf_, np.inf)
+    if exps:
+        with np.errstate(over="ignore", under="ignore"):  # beyond the float range: inf or 0, as y² there
+            out = {nm: np.ldexp(v, 2 * exps["y"]) for nm, v in out.items()}
     return out
 
 
