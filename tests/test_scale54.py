@@ -240,6 +240,19 @@ def test_cls_on_a_dask_record_is_the_same_fit_near_the_float_ranges_ends(ky, ku)
                                atol=1e-13 * np.max(np.abs(base)))
 
 
+def _uncertainties_refuse(rec, pts, said: str) -> None:
+    """cls_, ls_ and pe_uncertainty on ``rec`` and ``pts`` each refuse with ``said`` after their name, warning nothing."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ValueError, match="^cls_uncertainty: " + said):
+            gb.cls_uncertainty(gb.cls(_QP_TERMS, rec, pts, how="points").model, rec, pts, how="points")
+        with pytest.raises(ValueError, match="^ls_uncertainty: " + said):
+            gb.ls_uncertainty(gb.els(_QP_TERMS, rec, noise=0).model, rec)
+        member = gb.pe_pareto(_QP_TERMS, rec, pts, lambdas=[0.5]).models()[0]
+        with pytest.raises(ValueError, match="^pe_uncertainty: " + said):
+            gb.pe_uncertainty(member, rec, pts, lambda1=0.5)
+
+
 def test_uncertainty_refuses_a_variance_beyond_the_float_range_in_the_users_units():
     # y × 2^-700: σ² (output units², about 2^-1400) underflowed to 0, and cls_uncertainty returned a covariance of 0
     # (every parameter known exactly, from noisy data) without a word; so did ls_uncertainty
@@ -247,15 +260,7 @@ def test_uncertainty_refuses_a_variance_beyond_the_float_range_in_the_users_unit
     rec, pts = gb.Record(u, np.ldexp(y, -700)), _qp_points(-700, 0)
     said = (r"the noise variance σ² and the covariance are in output units².*beyond the float range in these units: "
             "rescale the signals")
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        with pytest.raises(ValueError, match="^cls_uncertainty: " + said):
-            gb.cls_uncertainty(gb.cls(_QP_TERMS, rec, pts, how="points").model, rec, pts, how="points")
-        with pytest.raises(ValueError, match="ls_uncertainty: " + said):
-            gb.ls_uncertainty(gb.els(_QP_TERMS, rec, noise=0).model, rec)
-        member = gb.pe_pareto(_QP_TERMS, rec, pts, lambdas=[0.5]).models()[0]
-        with pytest.raises(ValueError, match="pe_uncertainty: " + said):
-            gb.pe_uncertainty(member, rec, pts, lambda1=0.5)
+    _uncertainties_refuse(rec, pts, said)
 _POINTS_U = np.array([[0.6, -0.5], [1.0, 0.2], [1.5, 0.7], [1.9, -0.1], [1.2, 0.9], [0.8, 0.0], [1.7, 0.4]])
 _POINTS_Y = 48.0 + (0.2 * _POINTS_U[:, 0] + 0.05 * _POINTS_U[:, 0] ** 2) / 0.4
 
@@ -305,15 +310,7 @@ def test_uncertainty_names_the_term_whose_variance_leaves_the_float_range(ku):
     u, y = _plant()
     rec, pts = gb.Record(np.ldexp(u, ku), y), _qp_points(0, ku)
     said = r"the variance of the parameter of u\(k-1\)\^2 .*beyond the float range in these units.*rescale"
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        with pytest.raises(ValueError, match="^cls_uncertainty: " + said):
-            gb.cls_uncertainty(gb.cls(_QP_TERMS, rec, pts, how="points").model, rec, pts, how="points")
-        with pytest.raises(ValueError, match="^ls_uncertainty: " + said):
-            gb.ls_uncertainty(gb.els(_QP_TERMS, rec, noise=0).model, rec)
-        member = gb.pe_pareto(_QP_TERMS, rec, pts, lambdas=[0.5]).models()[0]
-        with pytest.raises(ValueError, match="^pe_uncertainty: " + said):
-            gb.pe_uncertainty(member, rec, pts, lambda1=0.5)
+    _uncertainties_refuse(rec, pts, said)
 
 
 def test_uncertainty_on_a_small_input_is_the_ordinary_units_one_scaled():
