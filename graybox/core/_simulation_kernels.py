@@ -377,7 +377,7 @@ def lattice_margin(a, w):  # pragma: no cover - compiled
 @nb.njit(cache=True, nogil=True, inline="always")
 def push_gain(c1, c2, margin):  # pragma: no cover - compiled
     """How far the linear output feedback at a sample amplifies the push (dimensionless); ``margin`` is
-    :func:`linear_margins`' (1: none; not −2, whose gain needs every lag's sum: 1 / :func:`lattice_margin`).
+    :func:`linear_margins`' (1: none).
 
     ``c1 + c2`` is the sum of the coefficients of the single past outputs y(k−l) at that sample, terms θ y(k−l) and
     input-dependent ones θ y(k−l) · (inputs) alike (C_g(k) of the monomials of output power 1), so the gain is the
