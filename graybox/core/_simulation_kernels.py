@@ -323,58 +323,6 @@ def pole_margin(a1, a2):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def lattice3(a1, a2, a3):  # pragma: no cover - compiled
-    """:func:`lattice_margin` of a feedback of order three, unrolled (scalars, no work array: it runs at every sample
-    of every member of a population)."""
-    k3 = -a3
-    inside = abs(k3) < 1.0
-    s3 = 1.0 - k3 * k3 if inside else 1.0
-    b1 = (-a1 + k3 * a2) / s3  # α_1 − k3 α_2 over 1 − k3², α = −a
-    k2 = (-a2 + k3 * a1) / s3
-    inside = inside and abs(k2) < 1.0
-    k1 = b1 / (1.0 + k2) if inside else 0.0  # the middle coefficient: (α − k2 α) / (1 − k2²)
-    inside = inside and abs(k1) < 1.0
-    prod = (1.0 - abs(k3)) * (1.0 - abs(k2)) * (1.0 - abs(k1))
-    return max(prod / 7.0, 1.0 - (abs(a1) + abs(a2) + abs(a3)), 2.2250738585072014e-308) if inside else 2.0
-
-
-@nb.njit(cache=True, nogil=True)
-def lattice_margin(a, w):  # pragma: no cover - compiled
-    """1 / a bound on Σ|h| of y(k) = Σ_l a_l y(k−l) + push, l = 1 … L (``a`` a 1-D view of length L), where every pole
-    lies inside the unit circle; else 2 (dimensionless): :func:`linear_margins`' rule for a feedback through the
-    inputs that reads a lag beyond 2, at every sample. ``w`` is a work array of at least L floats.
-
-    The Schur–Cohn step-down of A(z) = 1 − Σ a_l z^−l gives its reflection coefficients k_L … k_1 (every |k_m| < 1
-    exactly when every pole is inside), and on the unit circle |A_m| >= (1 − |k_m|) |A_(m−1)| (the step-up
-    A_m(z) = A_(m−1)(z) + k_m z^−m A_(m−1)(1/z), whose two parts have one modulus there), so
-    sup_ω 1/|A(e^{jω})| <= 1 / Π (1 − |k_m|); and Σ|h| <= (2L + 1) sup_ω |H| for a system of order L (Boyd and
-    Doyle's peak-to-peak bound), hence the margin Π (1 − |k_m|) / (2L + 1), or 1 − Σ|a_l| where that is larger
-    (Σ|h| <= 1 / (1 − Σ|a_l|), the small-gain bound: tighter for a plant of real positive poles, and what the batch
-    kernels test first, cheaply, before they step down). A lightly damped pair driven at its own frequency builds up
-    to sup |H| ≫ 1/D, which the steady gain 1/D of :func:`push_gain` does not cover."""
-    L = a.shape[0]
-    small = 1.0
-    for i in range(L):
-        w[i] = -a[i]  # A's coefficients α_1 … α_L of z^−1 … z^−L
-        small -= abs(a[i])
-    prod = 1.0
-    for m in range(L, 0, -1):
-        k = w[m - 1]
-        if not abs(k) < 1.0:  # a pole on or outside the unit circle (NaN: not inside)
-            return 2.0
-        prod *= 1.0 - abs(k)
-        s = 1.0 - k * k
-        for i in range((m - 1) // 2 + 1):  # α_i ← (α_i − k α_(m−i)) / (1 − k²), i = 1 … m − 1, in pairs
-            j = m - 2 - i
-            if i > j:
-                break
-            lo, hi = w[i], w[j]
-            w[i] = (lo - k * hi) / s
-            w[j] = (hi - k * lo) / s
-    return max(prod / (2.0 * L + 1.0), small, 2.2250738585072014e-308)
-
-
-@nb.njit(cache=True, nogil=True, inline="always")
 def push_gain(c1, c2, margin):  # pragma: no cover - compiled
     """How far the linear output feedback at a sample amplifies the push (dimensionless); ``margin`` is
     :func:`linear_margins`' (1: none).
@@ -415,8 +363,7 @@ def linear_margins(code: Code, thetas: np.ndarray) -> np.ndarray:
     the unit circle, 2 where one does not (no steady level, whatever D: :func:`push_gain` then keeps the push's own
     scale), 1 where θ is not finite. Where a term y(k−l) · (inputs) feeds back too, the constant terms are no account
     of the feedback: −1 where no single past output lies beyond lag 2 (:func:`push_gain` reads the poles of the
-    feedback at each sample's inputs), −2 where one does (:func:`lattice_margin` of each sample's feedback). Shape
-    (P,), in (0, 2], −1 or −2.
+    feedback at each sample's inputs), else 1 (its steady gain at each sample). Shape (P,), in (0, 2] or −1.
 
     A push X bounded by |X| <= x holds a stable linear recursion at |y| <= x Σ_j |h(j)| <= x Π 1 / (1 − |p|): for
     real positive poles that is the steady gain 1 / D of :func:`push_gain`, but a lightly damped pair driven at its
@@ -431,7 +378,7 @@ def linear_margins(code: Code, thetas: np.ndarray) -> np.ndarray:
     lags = [int(code.ylag[t, 0]) for t in single]
     L = max(lags)
     if any(code.uptr[t] != code.uptr[t + 1] for t in single):
-        return np.where(np.all(np.isfinite(th), axis=1), -1.0 if L <= 2 else -2.0, 1.0)
+        return out if L > 2 else np.where(np.all(np.isfinite(th), axis=1), -1.0, 1.0)
     if th.shape[0] == 1 and L <= 2:  # one run's (simulate, predict): the poles in floats, no array work
         c = [0.0, 0.0]
         for t, l in zip(single, lags):
@@ -475,9 +422,6 @@ def _start_ref(y, start):  # pragma: no cover - compiled
 def _feedback_margins(C, gny, gylag, mm, D, E, margin):  # pragma: no cover - compiled
     # D[i] = 1 / push_gain at the samples i < mm, from the coefficients C_g of the single past outputs (monomials
     # of output power 1) summed by lag (1 in D, 2 and beyond in E); loops over the samples (vectorised)
-    if margin < -1.5:  # the feedback through the inputs reads a lag beyond 2: every lag's sum, sample by sample
-        _lattice_margins(C, gny, gylag, mm, D)
-        return
     for i in range(mm):
         D[i] = 0.0
         E[i] = 0.0
@@ -491,32 +435,6 @@ def _feedback_margins(C, gny, gylag, mm, D, E, margin):  # pragma: no cover - co
                     E[i] += C[g, i]
     for i in range(mm):
         D[i] = _push_margin(D[i], E[i], margin)
-
-
-@nb.njit(cache=True, nogil=True, inline="always")
-def _single_lags(gny, gylag):  # pragma: no cover - compiled (inlined)
-    # the largest lag of a single past output y(k−l) among the monomials (0: none)
-    L = 0
-    for g in range(gny.shape[0]):
-        if gny[g] == 1 and gylag[g, 0] > L:
-            L = gylag[g, 0]
-    return L
-
-
-@nb.njit(cache=True, nogil=True)
-def _lattice_margins(C, gny, gylag, mm, D):  # pragma: no cover - compiled
-    # D[i] = 1 / push_gain at the samples i < mm by lattice_margin of that sample's a_l (every lag's sum of C_g)
-    L = _single_lags(gny, gylag)
-    a = np.empty(L)
-    w = np.empty(L)
-    for i in range(mm):
-        for l in range(L):
-            a[l] = 0.0
-        for g in range(gny.shape[0]):
-            if gny[g] == 1:
-                a[gylag[g, 0] - 1] += C[g, i]
-        pm = lattice3(a[0], a[1], a[2]) if L == 3 else lattice_margin(a, w)
-        D[i] = 1.0 if pm > 1.0 else pm
 
 
 @nb.njit(cache=True, nogil=True)
@@ -682,8 +600,8 @@ def _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, cacc, bounded):  # pragma:
     if bounded:
         for p in range(P):
             xacc[p] = 0.0
-            for r in range(cacc.shape[0]):
-                cacc[r, p] = 0.0
+            cacc[0, p] = 0.0
+            cacc[1, p] = 0.0
     for t in range(nt):
         c = U[k, t]
         m = ny[t]
@@ -699,7 +617,7 @@ def _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, cacc, bounded):  # pragma:
         elif m == 1:
             a = (k - ylag[t, 0]) & mask
             if bounded:
-                r = min(ylag[t, 0], cacc.shape[0]) - 1  # 2 rows: lag 1, the others; more: one per lag
+                r = 0 if ylag[t, 0] == 1 else 1
                 for p in range(P):
                     v = thT[t, p] * c
                     acc[p] += v * Y[a, p]
@@ -737,30 +655,18 @@ def _bound_start(ref):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def _bound_members(ref, bnd, xacc, cacc, acc, margin, poles, work):  # pragma: no cover - compiled
+def _bound_members(ref, bnd, xacc, cacc, acc, margin, poles):  # pragma: no cover - compiled
     # The default bound of _one for every member p: its scale ref[p] grows with G_p(k) |X_p(k)| (xacc, the
     # sum of its terms without y; G_p(k) the push_gain of its linear feedback at sample k, cacc[:, p]), and a
     # sample beyond BOUND_FACTOR × that scale is NaN, and so is every later one, as _one stops there: a stopped
     # member's bound is -1 for good (its NaN need not reach a later sample, e.g. y(k) = a y(k-2) reads only every
     # other one). ``poles``: some member's margin is -1 (the structure's feedback runs through the inputs): every
     # member's is then -1 but a padding member's (θ = 0: the poles' margin is 1 too) or a non-finite one's (not
-    # inside: the same 1), so one loop serves them all, without a branch per member. ``cacc`` of more than two rows
-    # (linear_margins' −2: the feedback through the inputs reads a lag beyond 2) holds a row per lag, read by
-    # lattice_margin with ``work`` (a row's length).
+    # inside: the same 1), so one loop serves them all, without a branch per member.
     P = acc.shape[0]
     for p in range(P):
         x = abs(xacc[p])
-        if cacc.shape[0] > 2:  # the feedback through the inputs reads a lag beyond 2: one row per lag
-            d = 1.0
-            for r in range(cacc.shape[0]):
-                d -= abs(cacc[r, p])
-            # lattice_margin is at least 1 − Σ|a_l|: where the push does not raise the scale even at that margin,
-            # it does not at lattice_margin's either (no step-down needed)
-            if x > ref[p] * d:
-                d = lattice3(cacc[0, p], cacc[1, p], cacc[2, p]) if cacc.shape[0] == 3 else \
-                    lattice_margin(cacc[:, p], work)
-        else:
-            d = pole_margin(cacc[0, p], cacc[1, p]) if poles else _push_margin(cacc[0, p], cacc[1, p], margin[p])
+        d = pole_margin(cacc[0, p], cacc[1, p]) if poles else _push_margin(cacc[0, p], cacc[1, p], margin[p])
         d = d if d <= 1.0 else 1.0
         if x > ref[p] * d:  # off the common path: a division only where the scale grows
             ref[p] = x / d
@@ -780,16 +686,12 @@ def _batch_block(thT, U, ny, ylag, Y, start, ref, margin):  # pragma: no cover -
     acc = np.empty(P)
     bounded, ref, bnd = _bound_start(ref)
     xacc = np.empty(P)
+    cacc = np.empty((2, P))
     poles = bounded and margin.shape[0] > 0 and margin.min() < 0.0
-    # a row per lag where the feedback through the inputs reads a lag beyond 2 (linear_margins' −2), else lag 1
-    # and the others
-    rows = max(2, _single_lags(ny, ylag)) if poles and margin.min() < -1.5 else 2
-    cacc = np.empty((rows, P))
-    work = np.empty(rows)
     for k in range(start, n):
         _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, cacc, bounded)
         if bounded:
-            _bound_members(ref, bnd, xacc, cacc, acc, margin, poles, work)
+            _bound_members(ref, bnd, xacc, cacc, acc, margin, poles)
         for p in range(P):
             Y[k, p] = acc[p]
 
@@ -905,16 +807,12 @@ def _batch_sse(thT, U, ny, ylag, y, start, ring, ref, margin):  # pragma: no cov
     acc = np.empty(P)
     bounded, ref, bnd = _bound_start(ref)
     xacc = np.empty(P)
+    cacc = np.empty((2, P))
     poles = bounded and margin.shape[0] > 0 and margin.min() < 0.0
-    # a row per lag where the feedback through the inputs reads a lag beyond 2 (linear_margins' −2), else lag 1
-    # and the others
-    rows = max(2, _single_lags(ny, ylag)) if poles and margin.min() < -1.5 else 2
-    cacc = np.empty((rows, P))
-    work = np.empty(rows)
     for k in range(start, n):
         _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, cacc, bounded)
         if bounded:
-            _bound_members(ref, bnd, xacc, cacc, acc, margin, poles, work)
+            _bound_members(ref, bnd, xacc, cacc, acc, margin, poles)
         kk = k & mask
         yk = y[k]
         for p in range(P):
