@@ -24,8 +24,8 @@ if TYPE_CHECKING:
 __all__ = ["column_scales", "scaled_lstsq", "thread_pools", "one_blas_thread", "check_rows", "free_directions",
            "check_identified", "rank_tolerance", "HELD_OUTPUT", "CONSTANT_RTOL", "output_spread", "output_scale",
            "spread_scale", "beyond_float_range", "refuse_beyond_float_range", "refuse_parameter_scales",
-           "binary_scaled", "scaled_theta", "scaled_points", "unscaled_theta", "unscaled_rss", "unscaled_levels", "scaled_norm", "scaled_norms",
-           "mean_square", "binary_exponent"]
+           "binary_scaled", "scaled_theta", "scaled_points", "unscaled_theta", "unscaled_rss", "unscaled_levels",
+           "scaled_norm", "scaled_norms", "mean_square", "binary_exponent"]
 
 _CONTROLLER: list[ThreadpoolController] = []
 

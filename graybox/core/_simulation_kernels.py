@@ -883,7 +883,8 @@ def batch_sse(
         if threads <= 1 or P < 2 * threads:
             return _batch_sse(thT, U, code.ny, code.ylag, kernel_array(y), start, ring, ref, margin)
         blocks = kernel_array(_blocks(thT, int(threads)))  # read-only, as thT is: one compiled kernel
-        return _batch_sse_parallel(blocks, U, code.ny, code.ylag, kernel_array(y), start, ring, _ref_blocks(ref, blocks),
+        return _batch_sse_parallel(blocks, U, code.ny, code.ylag, kernel_array(y), start, ring,
+                                   _ref_blocks(ref, blocks),
                                    _ref_blocks(margin - 1.0, blocks) + 1.0).ravel()[:P]  # padding: margin 1
 
 

@@ -8,7 +8,7 @@ same definitions as Table I.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Mapping, Sequence
 
 import numpy as np
@@ -19,7 +19,6 @@ from ..models._coerce import as_structure
 from ..models._model import Model, model_input_names
 from ..core._records import (Dataset, Record, RecordPrint, StaticPoints, as_records, carried_from, check_fitted_on,
                              check_units)
-from ..core._least_squares import binary_scaled, scaled_points, scaled_theta
 from ..core._validation import (Relocked, FrozenMap, check_bool, check_fields, check_int, check_mean_square, check_real,
                                 check_weight, float_array, frozen, real_array)
 from ..core._terms import Structure
@@ -71,30 +70,22 @@ def members_js(structure: Structure, thetas: np.ndarray, records: Sequence[Recor
     """J_1 (with ``one_step``) and J_S, the sample-weighted means over ``records`` (each from its own max-lag on), and
     J_SF at ``static`` (NaN without), of each row of ``thetas``, output units², shape (P,) each.
 
-    Evaluated on the signals times powers of two (exact) where squares of the output's could leave the float range,
-    and mapped back: at y × 2^512 the samples times J_S (about 2^1018) overflowed, and every member read diverged.
-    inf or 0 where a J itself is beyond the float range, as y² there (the decision rules refuse them)."""
+    Each record's J's are :func:`~graybox.models._evaluate.evaluate_thetas`' (on the signals times powers of two near
+    the float range's ends) and each is weighted by its share of the samples: at y × 2^512 the samples times J_S
+    (about 2^1018) overflowed, and every member read diverged. inf or 0 where a J itself is beyond the float range,
+    as y² there (the decision rules refuse them)."""
     L = structure.max_lag
     P = np.atleast_2d(thetas).shape[0]
-    recs, exps = binary_scaled(list(records), structure)
-    if exps:
-        thetas = scaled_theta(thetas, structure, exps)
-        static = None if static is None else scaled_points(static, exps)
-    j1, js = np.zeros(P), np.zeros(P)
-    total = 0
-    for r in recs:
+    total = sum(len(r) - L for r in records)
+    names = ("J1", "JS") if one_step else ("JS",)
+    out = {nm: np.zeros(P) for nm in names}
+    for r in records:
         ev = evaluate_thetas(structure, thetas, r, None, one_step=one_step, threads=threads)
-        w = len(r) - L
-        with np.errstate(invalid="ignore", over="ignore"):
-            if one_step:
-                j1 += w * ev["J1"]
-            js += w * ev["JS"]
-        total += w
-    out = {"J1": j1 / total, "JS": js / total} if one_step else {"JS": js / total}
+        share = (len(r) - L) / total
+        with np.errstate(invalid="ignore"):
+            for nm in names:
+                out[nm] += share * ev[nm]
     out["JSF"] = np.full(P, np.nan) if static is None else evaluate_thetas(structure, thetas, None, static)["JSF"]
-    if exps:
-        with np.errstate(over="ignore", under="ignore"):
-            out = {nm: np.ldexp(v, 2 * exps["y"]) for nm, v in out.items()}
     return out
 
 

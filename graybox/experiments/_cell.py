@@ -23,7 +23,6 @@ from .. import _api as gb
 
 from ..static._constraints import static_cluster_map
 from ..estimation._decisions import min_jsf_index
-from ..estimation._pareto import members_js
 from ..estimation._prediction_error import numerator_surface
 from ..core._least_squares import thread_pools
 from ..core._validation import check_int
@@ -219,9 +218,7 @@ def _members(pareto: gb.ParetoSet, data: gb.Dataset) -> dict[str, Any]:
     ok = np.array([i not in pareto.failures for i in range(K)], bool)
     js_valid = np.full(K, np.inf)
     if ok.any():
-        # on the signals times powers of two where squares of the output's leave the float range (at y × 2^512
-        # every member's J_S read inf)
-        js_valid[ok] = members_js(pareto.structure, pareto.thetas[ok], [data.valid], one_step=False)["JS"]
+        js_valid[ok] = gb.evaluate_thetas(pareto.structure, pareto.thetas[ok], data.valid, one_step=False)["JS"]
     # fit % from J_S as gb.fit_percent defines it: 100 (1 − ‖y − ŷ‖ / ‖y − mean(y)‖) from sample L on;
     # NaN where a held (constant) validation output leaves it undefined
     y = data.valid.y[pareto.structure.max_lag:]

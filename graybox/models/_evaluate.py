@@ -312,12 +312,14 @@ def evaluate_thetas(
     # signals whose squares (or products of the terms) near the float range's ends: evaluated on the signals times
     # powers of two (exact) and the J's mapped back, so that they do not depend on the units (at y × 2^512 the sums
     # of squares, about 2^1027, read inf; with a y² term the equilibria overflowed)
-    probe = record if record is not None else None if static is None else Record(
-        np.asarray(static.ubar, float), np.asarray(static.ybar, float), input_names=static.input_names)
-    scaled, exps = ([probe], {}) if probe is None else binary_scaled([probe], structure)
+    exps: dict[str, int] = {}
+    if record is not None:
+        (record,), exps = binary_scaled([record], structure)
+    elif static is not None:  # the static points alone set the exponents
+        exps = binary_scaled([Record(np.asarray(static.ubar, float), np.asarray(static.ybar, float),
+                                     input_names=static.input_names)], structure)[1]
     if exps:
         th = scaled_theta(th, structure, exps)
-        record = None if record is None else scaled[0]
         static = None if static is None else scaled_points(static, exps)
     out: dict[str, np.ndarray] = {}
     if record is not None:
