@@ -136,9 +136,8 @@ def check_choosable(pareto: ParetoSet, what: str, needs_jsf: bool = True) -> Non
         raise ValueError(f"{what}: no member of the Pareto set ({K} members, method {pareto.method!r}) has a J_SF (NaN: "
                          "the set was evaluated without static points); evaluate it at static points "
                          "(ParetoSet.from_thetas(..., static=points))")
-    if needs_jsf:
-        _check_in_float_range(pareto, what, ok)
     if needs_jsf:  # the rules that rank J_SF rank (or break its ties by) J_S: a member not computed is not skipped
+        _check_in_float_range(pareto, what, ok)
         for nm, v in (("J_S", pareto.JS), ("J_SF", pareto.JSF)):
             nan = np.flatnonzero(np.isnan(v) & ok)
             if nan.size:

@@ -1310,24 +1310,22 @@ class _Start:
         self.problem = problem
         self.key = np.array(z0, dtype=float).tobytes()  # bit for bit: a start is only ever this very point
         self.lam1 = lam1
-        self._r: np.ndarray | None = None
-        self._T: np.ndarray | None = None
+        self._at_start: dict = {}  # evaluator -> its read-only value at z0
+
+    def _once(self, evaluate, z: np.ndarray) -> np.ndarray:
+        if z.tobytes() != self.key:
+            return evaluate(self.problem, z, self.lam1)
+        if evaluate not in self._at_start:
+            value = evaluate(self.problem, z, self.lam1)
+            value.flags.writeable = False
+            self._at_start[evaluate] = value
+        return self._at_start[evaluate]
 
     def residuals(self, z: np.ndarray) -> np.ndarray:
-        if z.tobytes() != self.key:
-            return _residuals(self.problem, z, self.lam1)
-        if self._r is None:
-            self._r = _residuals(self.problem, z, self.lam1)
-            self._r.flags.writeable = False
-        return self._r
+        return self._once(_residuals, z)
 
     def r_factor(self, z: np.ndarray) -> np.ndarray:
-        if z.tobytes() != self.key:
-            return _r_factor(self.problem, z, self.lam1)
-        if self._T is None:
-            self._T = _r_factor(self.problem, z, self.lam1)
-            self._T.flags.writeable = False
-        return self._T
+        return self._once(_r_factor, z)
 
 
 class _Compressed:
