@@ -7,7 +7,9 @@ staircases (each level held 5 samples: u(k-1) = u(k-2) on 4 samples in 5) or by 
 inputs, with equation noise e(k) (y(k) = F(·) + e(k), the NARX model class itself, so the true
 structure is what a consistent selector should find) of 0, 1 % and 5 % of the noise-free output's
 standard deviation. Selectors: FROLS (greedy), ``frols(search="swap")``, ``frols(search="exact")``
-and SEMP, each (a) given the true size (``n_terms``) and (b) choosing it by BIC over 1 … 12 terms.
+and SEMP, each (a) given the true size (``n_terms``), (b) choosing it by BIC over 1 … 12 terms and (c) by EBIC
+(BIC plus 2 ln C(p, k): the subsets of k terms among the p candidates; swap's and exact's default since
+2026-11-29). ``--selectors`` and ``--modes`` pick among them.
 A trial counts as recovered when the selected set of terms equals the true one.
 
 ``--dump`` writes the candidate matrices and targets of every trial to an .npz file for
@@ -85,7 +87,11 @@ def one_step_rss(structure: Structure, rec: Record, start: int) -> float:
     return float(np.sum((y - psi @ theta) ** 2))
 
 
-def trials(seeds: int, n: int, dump: str | None) -> pd.DataFrame:
+MODES = {"n_terms": None, "bic": {"criterion": "bic", "max_terms": MAX_TERMS},
+         "ebic": {"criterion": "ebic", "max_terms": MAX_TERMS}}
+
+
+def trials(seeds: int, n: int, dump: str | None, selectors=SELECTORS, modes=tuple(MODES)) -> pd.DataFrame:
     rows = []
     store: dict[str, np.ndarray] = {}
     for system in SYSTEMS:
@@ -102,8 +108,9 @@ def trials(seeds: int, n: int, dump: str | None) -> pd.DataFrame:
                         key = f"{system}|{kind}|{noise}|{seed}"
                         store[key + "|X"], store[key + "|y"] = psi, y
                         store[key + "|true"] = np.array([cand.process.index(t) for t in true])
-                    for sel in SELECTORS:
-                        for mode, kw in (("n_terms", dict(n_terms=k)), ("bic", dict(max_terms=MAX_TERMS))):
+                    for sel in selectors:
+                        for mode in modes:
+                            kw = MODES[mode] or {"n_terms": k}
                             t0 = time.perf_counter()
                             with warnings.catch_warnings():
                                 warnings.simplefilter("ignore")
@@ -120,31 +127,37 @@ def trials(seeds: int, n: int, dump: str | None) -> pd.DataFrame:
 
 def report(df: pd.DataFrame, seeds: int) -> None:
     df = df.assign(kind=np.where(df["system"].str.startswith("SISO"), "SISO", "2-input"))
-    for mode, title in (("n_terms", "given the true size"), ("bic", f"size by BIC over 1 … {MAX_TERMS}")):
+    shown = [s for s in SELECTORS if s in set(df["selector"])]
+    titles = {"n_terms": "given the true size", "bic": f"size by BIC over 1 … {MAX_TERMS}",
+              "ebic": f"size by EBIC over 1 … {MAX_TERMS}"}
+    for mode in [m for m in MODES if m in set(df["mode"])]:
+        title = titles[mode]
         d = df[df["mode"] == mode]
         tab = d.pivot_table(index=["kind", "inputs", "noise"], columns="selector", values="recovered", aggfunc="sum")
-        tab = tab[list(SELECTORS)]
+        tab = tab[shown]
         print(f"\nTrue structure recovered, {title} (out of {2 * seeds} records: 2 systems × {seeds} seeds)\n")
-        print("| systems | inputs | noise | " + " | ".join(SELECTORS) + " |")
-        print("| --- | --- | --- | " + " | ".join("---" for _ in SELECTORS) + " |")
+        print("| systems | inputs | noise | " + " | ".join(shown) + " |")
+        print("| --- | --- | --- | " + " | ".join("---" for _ in shown) + " |")
         for (kind, inputs, noise), r in tab.iterrows():
-            print(f"| {kind} | {inputs} | {noise:.0%} | " + " | ".join(str(int(r[s])) for s in SELECTORS) + " |")
+            print(f"| {kind} | {inputs} | {noise:.0%} | " + " | ".join(str(int(r[s])) for s in shown) + " |")
     d = df[df["mode"] == "n_terms"]
+    if d.empty:
+        return
     med = d.pivot_table(index=["kind", "inputs"], columns="selector", values="rss_ratio", aggfunc="median")[
-        list(SELECTORS)]
+        shown]
     print("\nMedian one-step RSS of the selected structure / the true structure's (given the true size)\n")
-    print("| systems | inputs | " + " | ".join(SELECTORS) + " |")
-    print("| --- | --- | " + " | ".join("---" for _ in SELECTORS) + " |")
+    print("| systems | inputs | " + " | ".join(shown) + " |")
+    print("| --- | --- | " + " | ".join("---" for _ in shown) + " |")
     for (kind, inputs), r in med.iterrows():
-        print(f"| {kind} | {inputs} | " + " | ".join(f"{r[s]:.3g}" for s in SELECTORS) + " |")
+        print(f"| {kind} | {inputs} | " + " | ".join(f"{r[s]:.3g}" for s in shown) + " |")
     tim = df.pivot_table(index=["kind", "mode"], columns="selector", values="seconds", aggfunc="median")[
-        list(SELECTORS)]
-    mx = df.pivot_table(index=["kind", "mode"], columns="selector", values="seconds", aggfunc="max")[list(SELECTORS)]
+        shown]
+    mx = df.pivot_table(index=["kind", "mode"], columns="selector", values="seconds", aggfunc="max")[shown]
     print("\nWall time per selection, median (max), seconds\n")
-    print("| systems | stopping | " + " | ".join(SELECTORS) + " |")
-    print("| --- | --- | " + " | ".join("---" for _ in SELECTORS) + " |")
+    print("| systems | stopping | " + " | ".join(shown) + " |")
+    print("| --- | --- | " + " | ".join("---" for _ in shown) + " |")
     for (kind, mode), r in tim.iterrows():
-        print(f"| {kind} | {mode} | " + " | ".join(f"{r[s]:.3f} ({mx.loc[(kind, mode), s]:.2f})" for s in SELECTORS)
+        print(f"| {kind} | {mode} | " + " | ".join(f"{r[s]:.3f} ({mx.loc[(kind, mode), s]:.2f})" for s in shown)
               + " |")
 
 
@@ -154,13 +167,16 @@ def main() -> None:
     ap.add_argument("--n", type=int, default=1000, help="samples per record")
     ap.add_argument("--dump", default=None, help="write the candidate matrices to this .npz (for the peers)")
     ap.add_argument("--csv", default=None, help="write every trial to this CSV")
+    ap.add_argument("--selectors", default=",".join(SELECTORS), help="comma-separated, among " + ", ".join(SELECTORS))
+    ap.add_argument("--modes", default=",".join(MODES), help="comma-separated, among " + ", ".join(MODES))
     args = ap.parse_args()
     now = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M")
-    print(f"bench_search.py --seeds {args.seeds} --n {args.n}: {now} UTC, git {git_rev()}, {machine()}")
+    print(f"bench_search.py --seeds {args.seeds} --n {args.n} --selectors {args.selectors} --modes {args.modes}: "
+          f"{now} UTC, git {git_rev()}, {machine()}")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         gb.semp(candidates("SISO-A"), record("SISO-A", "random", 0.0, 0, 200), n_terms=2)  # compile
-    df = trials(args.seeds, args.n, args.dump)
+    df = trials(args.seeds, args.n, args.dump, tuple(args.selectors.split(",")), tuple(args.modes.split(",")))
     if args.csv:
         df.to_csv(args.csv, index=False)
     report(df, args.seeds)

@@ -227,6 +227,7 @@ CALLS: dict[str, tuple[tuple, dict]] = {
     "Model.equation": ((), {}),
     "Model.to_latex": ((), {}),
     "frols": ((gb.Candidates(1, 1, degree=2), REC), {"n_terms": 2}),
+    "information_criterion": (("ebic", np.array([3.0, 2.0]), 10), {"n_candidates": 5, "n_included": 0}),
     "semp": ((gb.Candidates(1, 1, degree=2), REC), {"n_terms": 2}),
     "els": ((ST, REC), {"max_iter": 3}),
     "cls": ((ST, REC, CURVE), {}),

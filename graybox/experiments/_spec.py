@@ -32,6 +32,7 @@ from ..core._records import check_units
 from ..core._reprs import short_repr
 from ..estimation._extended_least_squares import DEFAULT_NE
 from ..estimation._simulation_error import gradient_front
+from ..selection._forward_regression import CRITERIA
 from ..static._constraints import FREE_SIGMA_Y, check_min_denominator
 from ..static._surfaces import monomial_exponents
 
@@ -640,7 +641,7 @@ class StructureSpec:
             object.__setattr__(self, "tol", _wrap(check_real, ("tol",), self.tol, "tol", low=0, high=1,
                                                   low_open=True, high_open=True))
         if self.criterion is not None:
-            _wrap(check_choice, ("criterion",), self.criterion, "criterion", ("aic", "bic", "fpe"))
+            _wrap(check_choice, ("criterion",), self.criterion, "criterion", CRITERIA)
         if self.max_terms is not None:
             object.__setattr__(self, "max_terms", _wrap(check_int, ("max_terms",), self.max_terms, "max_terms", low=1,
                                                         high=high))

@@ -250,7 +250,7 @@ def semp(
     *,
     n_terms: int | None = None,
     tol: float | None = None,
-    criterion: Literal["aic", "bic", "fpe"] | None = None,
+    criterion: Literal["aic", "bic", "fpe", "ebic"] | None = None,
     max_terms: int | None = None,
     include: Sequence[Term | str] = (),
     prune: bool = True,
@@ -283,8 +283,9 @@ def semp(
         Size of the structure to return.
     tol : float, optional
         Relative free-run error in (0, 1) that ends the search.
-    criterion : {"aic", "bic", "fpe"}, optional
-        Information criterion of the free-run error (see :func:`graybox.information_criterion`).
+    criterion : {"aic", "bic", "fpe", "ebic"}, optional
+        Information criterion of the free-run error (see :func:`graybox.information_criterion`; default
+        ``"bic"``; EBIC counts the candidates besides the included ones).
     max_terms : int, optional
         Largest structure looked at (``tol`` and ``criterion``; default min(30, candidates,
         samples after the largest lag − 1), what the record carries; a larger explicit one is an
@@ -495,6 +496,8 @@ class _Search:
         self.sc, self.opt = sc, opt
         self.names = [str(t) for t in opt.process]
         self.current = list(opt.forced)
+        # EBIC's p: the candidates a term can be chosen among (not included, not all-zero on these data)
+        self.n_free = sum(1 for j in range(len(self.names)) if j not in opt.forced and not sc.zero[j])
         zero = [self.names[j] for j in opt.forced if sc.zero[j]]
         if zero:  # in frols's words: one zero column is not 'collinear'
             raise ValueError(f"included term {zero[0]} cannot be used on these data: all-zero column")
@@ -521,7 +524,8 @@ class _Search:
         current, score, N = self.current, self.score, self.sc.n_rows
         self.rows.append({
             "step": len(self.rows), "action": action, "term": term, "n_terms": len(current), "score": score,
-            "criterion": float(criterion_of_sizes(self.opt.crit, len(current), score * N, N)[0]) if current else math.inf,
+            "criterion": float(criterion_of_sizes(self.opt.crit, len(current), score * N, N, self.n_free,
+                                                  len(self.opt.forced))[0]) if current else math.inf,
             "structure": " + ".join(self.names[j] for j in current) or "(empty)", "_set": tuple(current),
             "_theta": self.th.copy()})
 
