@@ -43,10 +43,9 @@ from __future__ import annotations
 import inspect
 import warnings
 from dataclasses import dataclass, field
-from typing import Callable, Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING, Callable, Iterable, Mapping, Sequence
 
 import numpy as np
-import pandas as pd
 
 from ..estimation._prediction_error import PE_LAMBDAS, pe_pareto
 from ..estimation._decisions import FALLBACKS, decide_dsf, resolve_band
@@ -62,6 +61,9 @@ from ..core._validation import (Relocked, FrozenMap, check_band, check_choice, c
                                 check_lambdas, check_mean_square, check_real, check_seed, frozen, frozen_value, warn)
 from ..core._reprs import listed, share_text, short_repr
 from ._uncertainty import UncertaintyWarning
+
+if TYPE_CHECKING:  # pandas takes ~0.4 s to import: loaded where a table is made
+    import pandas as pd
 
 __all__ = ["BootstrapJob", "DecisionBootstrap", "bootstrap_decision", "block_resample"]
 
@@ -319,6 +321,8 @@ class DecisionBootstrap(Relocked):
 
         The reference decision's λ1 is listed (``reference`` True) even when no replicate chose it.
         """
+        import pandas as pd
+
         lam = self.lambda1[self.ok]
         vals, counts = np.unique(lam, return_counts=True)
         ref = self.reference.get("lambda1")
@@ -332,6 +336,8 @@ class DecisionBootstrap(Relocked):
 
     def summary(self) -> pd.DataFrame:
         """The spread of the chosen member's J_S and J_SF: reference, median, 5 % and 95 % quantiles, std."""
+        import pandas as pd
+
         rows = {}
         for name in ("JS", "JSF"):
             v = getattr(self, name)[self.ok]
@@ -345,6 +351,8 @@ class DecisionBootstrap(Relocked):
 
     def to_frame(self) -> pd.DataFrame:
         """One row per replicate: λ1, J_S, J_SF, in band, rule, failure."""
+        import pandas as pd
+
         return pd.DataFrame({"lambda1": self.lambda1, "JS": self.JS, "JSF": self.JSF, "in band": self.in_band,
                              "rule": self.rules, "failure": [self.failures.get(i, "") for i in range(self.n_replicates)]},
                             index=pd.RangeIndex(self.n_replicates, name="replicate"))

@@ -67,10 +67,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Mapping, Sequence
+from typing import TYPE_CHECKING, Mapping, Sequence
 
 import numpy as np
-import pandas as pd
 
 from ..models._coerce import MODEL_ACCEPTED, as_model, records_of
 from ..models._model import Model
@@ -82,6 +81,9 @@ from ..core._reprs import percent_text
 from ..estimation._extended_least_squares import _ma_invertible, _ma_text
 from ..core._validation import (Relocked, FrozenMap, check_agrees, check_bool, check_choice, check_fields, check_int,
                                 check_level, check_real, frozen, warn)
+
+if TYPE_CHECKING:  # pandas takes ~0.4 s to import: loaded where a table is made
+    import pandas as pd
 
 #: What a model argument of the residual tests may be, in words.
 _ACCEPTED = MODEL_ACCEPTED.replace("a Model or", "a Model, a NeuralModel or").replace(")", ", NeuralFit)")
@@ -307,6 +309,8 @@ class ResidualTests(Relocked):
 
     def to_frame(self) -> pd.DataFrame:
         """One row per test: label, kind, passed, max |φ|, worst lag, lags outside the band."""
+        import pandas as pd
+
         rows = {
             k: {"test": t.label, "kind": t.kind, "passed": t.passed, "max |phi|": float(np.max(np.abs(t.phi))),
                 "worst lag": t.worst_lag, "limit": t.limit, "band": t.band,

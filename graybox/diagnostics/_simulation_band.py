@@ -10,9 +10,9 @@ interval for a new measurement: the measurement noise and the structure's own er
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from ..core._gram import require_memory
 from ..core._records import check_units, said_units
@@ -24,6 +24,9 @@ from ..core._validation import (Relocked, check_count, check_band_finite, check_
 from ..models._coerce import as_record
 from ._uncertainty import (BAND_METHODS, MIN_DRAWS, ParameterUncertainty, UncertaintyWarning, check_band_draws,
                            theta_draws)
+
+if TYPE_CHECKING:  # pandas takes ~0.4 s to import: loaded where a table is made
+    import pandas as pd
 
 __all__ = ["SimulationBand", "simulation_band"]
 
@@ -115,6 +118,8 @@ class SimulationBand(Relocked):
 
     def to_frame(self) -> pd.DataFrame:
         """One row per sample: measured y, the free run ŷ, the band and the std, indexed by time (s)."""
+        import pandas as pd
+
         return pd.DataFrame({"y": self.y, "yhat": self.yhat, "low": self.low, "high": self.high, "std": self.std},
                             index=pd.Index(self.t, name="t"))
 

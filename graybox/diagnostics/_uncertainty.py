@@ -49,10 +49,9 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass, replace
-from typing import Iterable, Sequence
+from typing import TYPE_CHECKING, Iterable, Sequence
 
 import numpy as np
-import pandas as pd
 import scipy.linalg
 
 from ..static._constraints import StaticConstraint, static_cluster_map, static_rows
@@ -78,6 +77,9 @@ from ..static._surface_analysis import points_of_inputs, reached_surface, static
 from ..core._reprs import share_text
 from ..core._validation import (Relocked, check_count, check_band_finite, check_band_values, check_choice, check_fields,
                                 check_int, check_level, check_real, check_seed, frozen, warn)
+
+if TYPE_CHECKING:  # pandas takes ~0.4 s to import: loaded where a table is made
+    import pandas as pd
 
 __all__ = [
     "ParameterUncertainty",
@@ -310,6 +312,8 @@ class ParameterUncertainty(Relocked):
 
     def cluster_frame(self) -> pd.DataFrame:
         """One row per cluster: Σ, its standard deviation and interval (a constrained cluster has 0)."""
+        import pandas as pd
+
         cm = self.model.cluster_map()
         sig = cm.R @ self.theta
         sd = np.sqrt(self.contract(cm.R))
@@ -319,6 +323,8 @@ class ParameterUncertainty(Relocked):
 
     def to_frame(self) -> pd.DataFrame:
         """One row per term: θ, std, interval, relative std (std / |θ|)."""
+        import pandas as pd
+
         iv = self.intervals
         with np.errstate(invalid="ignore", divide="ignore"):
             rel = self.std / np.abs(self.theta)
@@ -1382,6 +1388,8 @@ class StaticCurveBand(Relocked):
 
     def to_frame(self) -> pd.DataFrame:
         """One row per ū: ȳ, its band and std, the gain, its band and std (and the undefined fraction)."""
+        import pandas as pd
+
         return pd.DataFrame({"ybar": self.ybar, "ybar low": self.ybar_low, "ybar high": self.ybar_high,
                              "ybar std": self.ybar_std, "gain": self.gain, "gain low": self.gain_low,
                              "gain high": self.gain_high, "gain std": self.gain_std, "undefined": self.undefined},
@@ -1451,6 +1459,8 @@ class StaticSurfaceBand(Relocked):
     def to_frame(self) -> pd.DataFrame:
         """One row per point (indexed by the inputs' levels): ȳ, its band and std, each input's gain with its band
         and std (columns ``gain <name>``, ``gain <name> low`` …) and the undefined fraction."""
+        import pandas as pd
+
         cols: dict[str, np.ndarray] = {"ybar": self.ybar, "ybar low": self.ybar_low, "ybar high": self.ybar_high,
                                        "ybar std": self.ybar_std}
         for i, n in enumerate(self.input_names):

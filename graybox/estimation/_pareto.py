@@ -9,10 +9,9 @@ same definitions as Table I.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Mapping, Sequence
+from typing import TYPE_CHECKING, Mapping, Sequence
 
 import numpy as np
-import pandas as pd
 
 from ..models._evaluate import evaluate_thetas
 from ..models._coerce import as_structure
@@ -23,6 +22,9 @@ from ..core._validation import (Relocked, FrozenMap, check_bool, check_fields, c
                                 check_weight, float_array, frozen, real_array)
 from ..core._terms import Structure
 from ..selection._centring import centred_data, centred_points
+
+if TYPE_CHECKING:  # pandas takes ~0.4 s to import: loaded where a table is made
+    import pandas as pd
 
 __all__ = ["ParetoSet", "nondominated_mask", "OBJECTIVES"]
 
@@ -357,6 +359,8 @@ class ParetoSet(Relocked):
 
     def to_frame(self, params: bool = False) -> pd.DataFrame:
         """One row per member: ``lambda1``, ``J1``, ``JS``, ``JSF``, extras (and θ by term if ``params``)."""
+        import pandas as pd
+
         params = check_bool(params, "params")
         cols = {"lambda1": self.lambdas, "J1": self.J1, "JS": self.JS, "JSF": self.JSF}
         cols.update(self.extra)

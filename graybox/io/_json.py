@@ -67,10 +67,9 @@ import re
 import reprlib
 from pathlib import Path
 from collections.abc import Mapping, Sequence
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
-import pandas as pd
 
 from ..estimation._decisions import Decision
 from ..estimation._extended_least_squares import ELSResult
@@ -97,6 +96,9 @@ from ..diagnostics._uncertainty import ParameterUncertainty, StaticCurveBand, St
 from ..diagnostics._residuals import CorrelationTest, ResidualTests
 from ..diagnostics._bootstrap import DecisionBootstrap
 from ..estimation._simulation_error import GAOptions
+
+if TYPE_CHECKING:  # pandas takes ~0.4 s to import: loaded where a table is made
+    import pandas as pd
 
 __all__ = ["FORMAT_VERSION", "GrayboxFileError", "save", "load", "to_json", "from_json", "read_header"]
 
@@ -374,6 +376,8 @@ _MAX_ROWS = 10**8
 
 
 def _column_kind(values: pd.Series | pd.Index, name: str) -> str:
+    import pandas as pd
+
     dtype = values.dtype
     if isinstance(dtype, np.dtype) and dtype in (np.int64, np.float64, np.bool_):
         return {"i": "int", "f": "float", "b": "bool"}[dtype.kind]
@@ -391,6 +395,8 @@ def _column(kind: str, values: Any) -> list:
 
 def _enc_frame(df: pd.DataFrame) -> dict:
     """A table as {index, columns, kinds, data}: one list per column (a row of the file each)."""
+    import pandas as pd
+
     idx = df.index
     labels = list(df.columns)
     bad = [c for c in labels if not isinstance(c, str)]
@@ -409,6 +415,8 @@ def _enc_frame(df: pd.DataFrame) -> dict:
 
 
 def _dec_column(kind: str, values: Any, where: str, rd: _Reader) -> Any:
+    import pandas as pd
+
     if kind not in _FRAME_KINDS:
         raise rd.fail(where, f"unknown column kind {kind!r} (one of {sorted(_FRAME_KINDS)})")
     read = getattr(rd, _FRAME_KINDS[kind][0])
@@ -417,6 +425,8 @@ def _dec_column(kind: str, values: Any, where: str, rd: _Reader) -> Any:
 
 
 def _dec_frame(v: Any, where: str, rd: _Reader) -> pd.DataFrame:
+    import pandas as pd
+
     d = rd.dict(v, where)
     need = ["index_name", "index_kind", "index", "columns", "kinds", "data"]
     missing = [k for k in need if k not in d]

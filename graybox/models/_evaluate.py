@@ -19,10 +19,9 @@ with a warning naming ū and why. Neither is a made-up number: both errors are u
 
 from __future__ import annotations
 
-from typing import Mapping, Sequence
+from typing import TYPE_CHECKING, Mapping, Sequence
 
 import numpy as np
-import pandas as pd
 
 from ..core._least_squares import CONSTANT_RTOL, mean_square, output_spread, scaled_norm  # noqa: F401 (home: core)
 from ..core._least_squares import binary_scaled, scaled_points, scaled_theta
@@ -37,6 +36,9 @@ from ..core._validation import (as_1d_finite, check_bool, check_finite_rows, che
 from ..static._analysis import reached_equilibria
 from ..static._surface_analysis import reached_surface
 from ..core._terms import Structure
+
+if TYPE_CHECKING:  # pandas takes ~0.4 s to import: loaded where a table is made
+    import pandas as pd
 
 __all__ = ["mse", "j1", "js", "jsf", "rrse", "fit_percent", "evaluate"]
 
@@ -206,6 +208,8 @@ def evaluate(
         ``fit_valid`` is NaN, with a ``RuntimeWarning``, when the validation output is constant
         (the fit % is undefined there).
     """
+    import pandas as pd
+
     if not isinstance(data, Dataset):
         raise TypeError(f"data must be a Dataset (the table scores its ident and valid records); got "
                         f"{type(data).__name__}; score a single record with graybox.j1 and graybox.js")

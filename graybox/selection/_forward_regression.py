@@ -48,11 +48,10 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass, field, replace
-from typing import Literal, Mapping, Sequence
+from typing import TYPE_CHECKING, Literal, Mapping, Sequence
 
 import numba as nb
 import numpy as np
-import pandas as pd
 
 from ..models._model import Model, model_input_names
 from ..core._records import Dataset, Record, carried_from, check_units, require_lengths
@@ -78,6 +77,9 @@ from ..core._validation import (Relocked, as_1d_finite, check_bool, check_choice
 from ._stopping import choose_model, stop_rule, FewerTermsError, StopRule
 from . import _centring
 from ._subset_search import search_sizes, SearchBudget, SubsetProblem
+
+if TYPE_CHECKING:  # pandas takes ~0.4 s to import: loaded where a table is made
+    import pandas as pd
 
 __all__ = ["Selection", "frols", "CandidateWarning", "CRITERIA", "information_criterion"]
 
@@ -313,6 +315,8 @@ class Selection(Relocked):
         value of the model made of this term and those above it), ``selected`` (bool),
         ``theta`` (LS parameter, NaN when not selected). Index: rank 1 … K.
         """
+        import pandas as pd
+
         k = len(self.evaluated)
         theta = np.full(k, np.nan)
         theta[: self.n_terms] = self.theta
