@@ -563,3 +563,20 @@ def test_a_nameless_models_divergence_names_the_system_not_none():
     named = dataclasses.replace(model, name="tank")
     with pytest.raises(gb.DivergenceError, match=r"^tank_narx: "):
         ct.input_output_response(gb.narx_iosystem(named), np.arange(2000.0), np.ones(2000), np.zeros(2))
+
+
+def test_an_operating_input_of_minus_zero_is_said_as_zero():
+    """ū = -0.0 (e.g. -1 * 0.0, a level read from a file) is the level 0: a reason or a repr reading "ū = -0" names
+    an input the user never set (mend58b)."""
+    unstable = gb.Model(["y(k-1)", "u(k-1)", "1"], [2.0, 1.0, 0.5], Ts=1.0)  # ȳ = -(ū + 0.5): one, unstable
+    lm = gb.local_model(unstable, -0.0)
+    assert lm.reason.startswith("ū = 0: no stable equilibrium; linearised at the unstable ȳ = -0.5 ")
+    assert repr(lm).startswith("LocalModel(ū = (0), ȳ = -0.5, no stable equilibrium")
+    integrator = gb.Model(["y(k-1)", "u(k-1)"], [1.0, 1.0], Ts=1.0)  # a continuum of equilibria at ū = 0
+    assert gb.local_model(integrator, -0.0, y0=-0.0).reason.startswith("ū = 0: a continuum of equilibria")
+    assert gb.local_model(integrator, -0.0, y0=-0.0).reason.endswith("; linearised at ȳ = y0 = 0")
+    with pytest.raises(ValueError, match=r"^ū = 0: a continuum"):
+        integrator.equilibria(-0.0)
+    two = gb.Model(["y(k-1)", "u1(k-1)", "u2(k-1)", "1"], [2.0, 1.0, 1.0, 0.5], Ts=1.0)
+    assert gb.local_model(two, [-0.0, 1.0]).reason.startswith("ū = (0, 1): no stable equilibrium")
+    assert repr(gb.local_model(two, [-0.0, 1.0])).startswith("LocalModel(ū = (0, 1), ȳ = -1.5,")

@@ -81,12 +81,12 @@ def level_texts(levels: np.ndarray) -> list[str]:
     list of str
         One text per level, in order.
     """
-    v = np.asarray(levels, float).ravel()
+    v = np.asarray(levels, float).ravel() + 0.0  # -0.0 is the level 0: "-0" names a level no one set
     distinct = np.unique(v).size
     # up to 16 digits, then repr: '%.17g' printed 0.3 beside 0.1 * 3 as '0.29999999999999999', below what it is
     for digits in range(6, 17):
         texts = [f"{x:.{digits}g}" for x in v]
-        if len(set(texts)) >= distinct:  # (-0.0 and 0.0 are one level, printed apart)
+        if len(set(texts)) >= distinct:
             return texts
     return [repr(float(x)) for x in v]
 
@@ -95,8 +95,8 @@ def exact_text(x: float) -> str:
     """A number as ``%g`` where that reads back as it, else with as many more significant digits as do: one value
     said alone, with no others to tell it from (a local model's ū 10000.01 printed '10000', as 10000.02 did). A text
     within a few units in the last place reads back as it: 0.1 * 3 is "0.3", not "0.30000000000000004" (``repr``),
-    the rounding of the arithmetic that made the value."""
-    x = float(x)
+    the rounding of the arithmetic that made the value. -0.0 is "0" (an input of -1 * 0.0 read "ū = -0")."""
+    x = float(x) + 0.0
     if not np.isfinite(x):
         return f"{x:g}"
     for digits in range(6, 18):
