@@ -580,3 +580,27 @@ def test_an_operating_input_of_minus_zero_is_said_as_zero():
     two = gb.Model(["y(k-1)", "u1(k-1)", "u2(k-1)", "1"], [2.0, 1.0, 1.0, 0.5], Ts=1.0)
     assert gb.local_model(two, [-0.0, 1.0]).reason.startswith("ū = (0, 1): no stable equilibrium")
     assert repr(gb.local_model(two, [-0.0, 1.0])).startswith("LocalModel(ū = (0, 1), ȳ = -1.5,")
+
+
+def test_narx_initial_state_takes_the_period_narx_iosystem_was_given_over_a_one_second_model():
+    # a model fitted on a record made without Ts= (1 s), run by narx_iosystem(model, Ts=0.05) at the real period:
+    # the state at a start of the real record (0.05 s) was refused as 'sampled every 1 s', with no way to say the
+    # period the system runs at (mend58b)
+    model = Model(["y(k-1)", "u(k-1)", "u(k-2)"], [0.6, 0.5, 0.1], noise_structure=["e(k-1)"], noise_theta=[0.3],
+                  Ts=1.0)
+    rng = np.random.default_rng(3)
+    u, y = rng.normal(size=30), rng.normal(size=30)
+    one, real = gb.Record(u=u, y=y), gb.Record(u=u, y=y, Ts=0.05)
+    with pytest.raises(ValueError, match=r"every 1 s but 'record' every 0.05 s.*Ts=0.05"):
+        gb.narx_initial_state(model, real)
+    for start in (2, 9):  # the lags alone; past the residuals' first sample, with them
+        x = gb.narx_initial_state(model, real, Ts=0.05, start=start, noise=True)
+        np.testing.assert_array_equal(x, [y[start - 1], u[start - 1], u[start - 2],
+                                          gb.one_step_residuals(model, one)[0][start - 1 - 2] if start > 2 else 0.0])
+    np.testing.assert_array_equal(x, gb.narx_initial_state(model, one, start=9, noise=True))
+    with pytest.raises(ValueError, match=r"runs every 0.05 s but 'record' every 1 s"):  # the system's period, not 1 s
+        gb.narx_initial_state(model, one, Ts=0.05)
+    at_real = dataclasses.replace(model, Ts=0.05)  # a model that knows its period: another is refused, as for the system
+    with pytest.raises(ValueError, match=r"identified at Ts = 0.05 s"):
+        gb.narx_initial_state(at_real, one, Ts=1.0)
+    np.testing.assert_array_equal(gb.narx_initial_state(at_real, real, Ts=0.05), gb.narx_initial_state(at_real, real))

@@ -26,13 +26,13 @@ controller that sets u then drives it, as the plant's own changes did in the rec
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from typing import Any
 
 import numpy as np
 
-from ..core._records import Record, frame_inputs, require_record
+from ..core._records import Record, check_period, frame_inputs, require_record
 from ..core._simulation import DivergenceError
 from ..core._terms import Structure, require_inputs, transient_source
 from ..core._transient import _tau_of, steady_levels
@@ -133,7 +133,8 @@ def narx_state_names(model: Model, *, noise: bool = False) -> list[str]:
     return names
 
 
-def narx_initial_state(model: Model, record: Record, *, start: int | None = None, noise: bool = False) -> np.ndarray:
+def narx_initial_state(model: Model, record: Record, *, start: int | None = None, noise: bool = False,
+                       Ts: float | None = None) -> np.ndarray:
     """The state of :func:`narx_iosystem`'s system at sample ``start`` of a record: its lagged outputs and inputs.
 
     Parameters
@@ -143,7 +144,8 @@ def narx_initial_state(model: Model, record: Record, *, start: int | None = None
     record : Record
         Measured data with the model's inputs (taken by name; its transient inputs too, as
         :func:`graybox.transient_inputs` gives them, as for :meth:`graybox.Model.simulate`), sampled at
-        the model's period (a record at another one is refused, as :meth:`graybox.Model.simulate` refuses it).
+        the system's period ``Ts`` (a record at another one is refused, as :meth:`graybox.Model.simulate`
+        refuses one at another than the model's).
     start : int, optional
         The sample the system starts at (at least the model's max lag L: the state holds
         y(start−1) … and u(start−1) …; default L, and with ``noise`` the first sample of the
@@ -154,6 +156,10 @@ def narx_initial_state(model: Model, record: Record, *, start: int | None = None
         one-step residuals on the record (:func:`graybox.one_step_residuals`; 0 before their first
         sample, as there), so that the system fed the residuals from ``start`` on reproduces
         ``record.y[start:]`` (from any start at or after the residuals' first sample).
+    Ts : float, optional
+        The period (s) :func:`narx_iosystem`'s system runs at, as given to it: default the model's own
+        (``model.Ts``); another than the model's refused but over its 1 s, the period of records made without
+        ``Ts=`` (a model fitted on such records, run at the real period, starts from a record at that period).
 
     Returns
     -------
@@ -163,7 +169,15 @@ def narx_initial_state(model: Model, record: Record, *, start: int | None = None
     model = check_polynomial(model, "narx_initial_state")
     noise = check_bool(noise, "noise")
     require_record(record)  # a Dataset: told to pass data.ident or data.valid
-    model.check_record(record)  # the system runs at the model's period and units: so must the lags it starts from
+    if Ts is not None:  # the system's period, as narx_iosystem takes it: the record's lags are its samples
+        Ts = check_Ts(Ts, None, model, takes_data=False)
+        check_period(Ts, f"Ts = {Ts:.9g} s: the system runs", record)
+        model = replace(model, Ts=Ts)  # its one-step residuals (noise=True) are read at that period too
+    elif model.Ts == 1.0 and record.Ts != 1.0:  # a model fitted on records made without Ts=: the real period is Ts=
+        check_period(model.Ts, f"model {model.name!r} was identified on records sampled", record,
+                     f"; if its records were made without Ts= and {record.name!r} is sampled at their real period, "
+                     f"give that period: Ts={record.Ts:.9g}, as to narx_iosystem")
+    model.check_record(record)  # the system runs at its period and the model's units: so must the lags it starts from
     lay = _layout(model.structure, model.input_names)
     # the inputs whose lags the state holds, with Model.simulate's hint for a missing one (a transient input's)
     require_inputs([n for n, Lu in zip(model.input_names, lay.Lu) if Lu], record.input_names,
@@ -242,7 +256,8 @@ def narx_iosystem(model: Model, *, Ts: float | None = None, noise: bool = False,
     which the update computes from their source inputs (module docstring), so that a controller
     setting u drives them; the output is ``"y"``. Connect it with a controller by
     ``control.interconnect`` and simulate with ``control.input_output_response`` (times
-    ``Ts * arange(N)``, initial state from :func:`narx_initial_state` or :func:`narx_steady_state`).
+    ``Ts * arange(N)``, initial state from :func:`narx_initial_state`, given the same ``Ts``, or
+    :func:`narx_steady_state`).
     By default the MA part of a NARMAX model is left out, as in :meth:`graybox.Model.simulate`.
 
     Parameters

@@ -570,14 +570,14 @@ def check_fitted_on(Ts: float | None, units: tuple[str, str], who: str, data: ob
     check_same_units(units, f"{who} with", data, advice)
 
 
-def check_period(Ts: float | None, what: str, record: Record) -> None:
+def check_period(Ts: float | None, what: str, record: Record, advice: str = "") -> None:
     """``ValueError`` unless ``record`` is sampled every ``Ts`` seconds (to :data:`PERIOD_RTOL`; None:
     unknown, nothing to check). ``what`` names the other side, e.g. "'ident' is sampled" or "model
-    'ELS' was identified on records sampled"."""
+    'ELS' was identified on records sampled"; ``advice`` ends the message."""
     if Ts is not None and abs(Ts - record.Ts) > PERIOD_RTOL * max(Ts, record.Ts):
         raise ValueError(f"{what} every {Ts:.9g} s but {record.name!r} every {record.Ts:.9g} s: a "
                          "discrete-time model holds at one sampling period; resample one of them (a Record "
-                         "made without Ts= has Ts = 1 s)")
+                         "made without Ts= has Ts = 1 s)" + advice)
 
 
 @dataclass(frozen=True, eq=False)
