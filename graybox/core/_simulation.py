@@ -18,6 +18,7 @@ from ._records import Dataset, Record, as_input_array, is_frame, record_hint, re
 from ._terms import carried_input_names, check_input_names, default_input_names, require_inputs
 from ._validation import as_1d_finite, check_choice, check_finite_rows, check_int, check_real, check_theta, real_array
 from ._regressors import regressor_columns
+from ._least_squares import binary_scaled, scaled_theta
 from ._terms import Structure, structure_of
 
 __all__ = ["predict", "simulate", "simulate_many", "DivergenceError", "free_run_inputs", "default_bound",
@@ -64,7 +65,7 @@ def predict(structure: Structure, theta: np.ndarray, record: Record, *, horizon:
         ŷ in the output's units; the first ``max_lag`` samples are the measured ones. From
         horizon 2 on, NaN where the run behind a prediction leaves :func:`simulate`'s default
         bound (from the measured outputs that run starts from and the record's inputs); one step
-        ahead, NaN only where the prediction leaves the float range (a high power of a large u or y).
+        ahead, NaN only where the prediction itself leaves the float range.
     """
     require_record(record)  # a Dataset: told to pass data.ident or data.valid
     check_fitted_record(structure, record)
@@ -75,9 +76,14 @@ def predict(structure: Structure, theta: np.ndarray, record: Record, *, horizon:
     record.require_length(L)
     if horizon == 1:
         yhat = record.y.copy()
-        # a term beyond the float range (a high power of a large u or y) was inf − inf with numpy's warnings
+        # on u and y times powers of two where a term's column nears the float range's ends (exact, as the estimators
+        # fit): y(k-1)² of y ≈ 1e-200 (1e-400, no float) was dropped, 17% of the output off, and of y ≈ 1e200 NaN
+        (scaled,), exps = binary_scaled([record], structure)
+        ths = scaled_theta(th, structure, exps) if exps else th
+        # a prediction beyond the float range was inf − inf with numpy's warnings: NaN
         with np.errstate(over="ignore", invalid="ignore"):
-            one = regressor_columns(structure, record.u, record.y, start=L, input_names=record.input_names) @ th
+            one = regressor_columns(structure, scaled.u, scaled.y, start=L, input_names=scaled.input_names) @ ths
+            one = np.ldexp(one, exps["y"]) if exps else one
         yhat[L:] = np.where(np.isfinite(one), one, np.nan)
         return yhat
     code = encode(structure, record.input_names)

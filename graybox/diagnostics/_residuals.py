@@ -79,6 +79,7 @@ from ..core._regressors import record_signals, regressor_matrix
 from ..core._simulation_kernels import inverse_ma_filter
 from ..core._reprs import percent_text
 from ..estimation._extended_least_squares import _ma_invertible, _ma_text
+from ..core._least_squares import binary_scaled, scaled_theta
 from ..core._validation import (Relocked, FrozenMap, check_agrees, check_bool, check_choice, check_fields, check_int,
                                 check_level, check_real, frozen, warn)
 
@@ -342,8 +343,15 @@ def _model_residuals(model: Model | NeuralModel, rec: Record, moving_average: bo
     ns = model.noise_structure if moving_average else model.noise_structure[:0]
     L = max(model.max_lag, ns.max_lag)
     rec.require_length(L)
-    psi = regressor_matrix(model.structure, rec.u, rec.y, start=L, input_names=rec.input_names)
-    v = rec.y[L:] - psi @ model.theta
+    psi = regressor_matrix(model.structure, rec.u, rec.y, start=L, input_names=rec.input_names)  # refuses overflow
+    # on u and y times powers of two where a column nears the float range's ends (exact, as the estimators fit and
+    # Model.predict predicts): y(k-1)² of y ≈ 1e-200 (1e-400, no float) was dropped, the residuals 20 times too large
+    (scaled,), exps = binary_scaled([rec], model.structure)
+    if exps:
+        psi = regressor_matrix(model.structure, scaled.u, scaled.y, start=L, input_names=rec.input_names)
+        v = np.ldexp(scaled.y[L:] - psi @ scaled_theta(model.theta, model.structure, exps), exps["y"])
+    else:
+        v = rec.y[L:] - psi @ model.theta
     if len(ns) == 0:
         return v, L
     c = model.noise_theta
