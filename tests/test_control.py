@@ -575,6 +575,7 @@ def test_an_operating_input_of_minus_zero_is_said_as_zero():
     integrator = gb.Model(["y(k-1)", "u(k-1)"], [1.0, 1.0], Ts=1.0)  # a continuum of equilibria at ū = 0
     assert gb.local_model(integrator, -0.0, y0=-0.0).reason.startswith("ū = 0: a continuum of equilibria")
     assert gb.local_model(integrator, -0.0, y0=-0.0).reason.endswith("; linearised at ȳ = y0 = 0")
+    assert repr(gb.local_model(integrator, -0.0, y0=-0.0)).startswith("LocalModel(ū = (0), ȳ = 0, continuum")
     with pytest.raises(ValueError, match=r"^ū = 0: a continuum"):
         integrator.equilibria(-0.0)
     two = gb.Model(["y(k-1)", "u1(k-1)", "u2(k-1)", "1"], [2.0, 1.0, 1.0, 0.5], Ts=1.0)

@@ -476,8 +476,8 @@ class LocalModel(Relocked):
         u = ", ".join(exact_text(v) for v in self.ubar)  # ū 10000.01 and 10000.02 printed alike with %g
         if self.ybar is None:
             return f"LocalModel(ū = ({u}): {self.reason})"
-        g = ", ".join(f"{v:.4g}" for v in self.dc_gain)
-        return (f"LocalModel(ū = ({u}), ȳ = {self.ybar:.6g}, {self.status}, gain = ({g}), "
+        g = ", ".join(f"{v + 0.0:.4g}" for v in self.dc_gain)  # + 0.0: -0.0 is 0, not "-0"
+        return (f"LocalModel(ū = ({u}), ȳ = {self.ybar + 0.0:.6g}, {self.status}, gain = ({g}), "
                 f"ρ = {self.spectral_radius:.4g}, τ = {self.time_constant:.4g} s)")
 
 
