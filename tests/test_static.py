@@ -379,3 +379,18 @@ def test_property_a_run_proven_to_settle_ends_as_its_run_does(c, ubar, pole, y0,
         an._contracting_runs = real
     np.testing.assert_array_equal(proven.status, ran.status)
     np.testing.assert_array_equal(proven.ybar, ran.ybar)
+
+
+def test_a_vanishing_denominator_at_an_input_of_minus_zero_is_said_at_zero():
+    # was "ū = [-0.0]" (mend58b made the local models' texts say 0; these lists were left)
+    import graybox as gb
+    from graybox.static._analysis import rational_static_curve
+
+    s = gb.parse_structure(["y(k-1)", "y(k-1)u(k-1)", "u(k-1)"])
+    theta = np.array([1.0, 0.5, 1.0])  # 1 − 1 − 0.5 ū vanishes at ū = 0
+    with pytest.raises(ValueError, match=r"vanishes at ū = \[0\.0\]"):
+        rational_static_curve(s, theta, np.array([-0.0, 1.0]))
+    rng = np.random.default_rng(0)
+    rec = gb.Record(rng.uniform(-1, 1, 200), rng.normal(size=200))
+    with pytest.raises(ValueError, match=r"does not exist at ū = \[0\.0\]"):
+        gb.cls(s, rec, gb.StaticPoints(np.array([-0.0, 1.0]), np.array([1.0, 2.0])))

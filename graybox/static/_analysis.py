@@ -885,7 +885,9 @@ def rational_static_curve(structure: Structure, theta: np.ndarray, ubar: np.ndar
     num, den, size = _rational_terms(structure, theta, ub)
     bad = denominator_vanishes(den, size)
     if bad.any():
-        raise ValueError(f"static function undefined: denominator 1 − Σy − … vanishes at ū = {ub[bad].tolist()}")
+        # + 0.0: an input of -0.0 is said as the level it is, 0.0
+        raise ValueError(f"static function undefined: denominator 1 − Σy − … vanishes at ū = "
+                         f"{(ub[bad] + 0.0).tolist()}")
     return num / den
 
 

@@ -726,7 +726,7 @@ def _check_static_exists(ctx: StaticContext, theta: np.ndarray, ubar: np.ndarray
     bad = _vanishing_denominator(ctx, theta, ub)
     if bad.any():
         raise ValueError(
-            f"{what}: the estimated model's static function does not exist at ū = {ub[bad].tolist()} "
+            f"{what}: the estimated model's static function does not exist at ū = {(ub[bad] + 0.0).tolist()} "
             "(its denominator 1 − Σy − Σyu ū − … vanishes there, so the static equation holds as 0 = 0 "
             f"and the point is not matched){hint or '; move the point or constrain the y clusters'}"
         )
@@ -799,7 +799,8 @@ class PassesThrough(StaticConstraint):
             raise ValueError(
                 f"{self.describe()}: the estimated model's static "
                 f"{'function' if is_rational(ctx.structure) else 'equation (its equilibrium near ȳ)'} misses the point at ū = "
-                f"{np.asarray(pts.ubar)[i].tolist()} by {miss[i]:.3g} (output units; the points span {spread:.3g}): the "
+                f"{(np.asarray(pts.ubar)[i] + 0.0).tolist()} by {miss[i]:.3g} (output units; the points span "
+                f"{spread:.3g}): the "
                 "equalities were met as D(ū)·(ȳ − ȳ_model(ū)) = 0 only to round-off, or not at all, with "
                 f"D = 1 − ∂(Σ_c Σ_c ȳ^p ū^m)/∂ȳ = {den[i]:.3g} there{hint or '; use fewer points or a StaticBand'}")
 
@@ -833,7 +834,7 @@ def _check_isolated(ctx: StaticContext, sig: np.ndarray, den: np.ndarray, pts: S
     if bad.any():
         ub = np.asarray(pts.ubar, float)
         raise ValueError(
-            f"{what}: the estimated model's static equation holds at ū = {ub[bad].tolist()} with a vanishing "
+            f"{what}: the estimated model's static equation holds at ū = {(ub[bad] + 0.0).tolist()} with a vanishing "
             "derivative in ȳ (1 − ∂(Σ_c Σ_c ȳ^p ū^m)/∂ȳ = 0), so the point is no isolated equilibrium (at Σy = 1 with "
             f"every other cluster 0 every level is one){hint or '; move the point or constrain the y clusters'}")
 
