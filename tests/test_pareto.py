@@ -281,3 +281,22 @@ def test_a_grid_cells_members_on_a_huge_output_keep_their_validation_figures():
     np.testing.assert_allclose(got[1]["fit_valid"], got[0]["fit_valid"], rtol=1e-12)
     assert got[1]["mse"] == pytest.approx(np.ldexp(got[0]["mse"], 1024), rel=1e-12)
     assert got[0]["mse"] == pytest.approx(got[0]["JS_valid"][0], rel=1e-12)
+
+
+@pytest.mark.parametrize("e", [505, -505])
+def test_a_diverging_or_exact_member_at_a_huge_or_tiny_output_is_no_range_artefact(e):
+    """A member whose free run diverges (y(k-1) θ 1.3: J_S inf, J_SF inf) read as a J beyond the float range at
+    y × 2^505 and even at y × 2^-505, where no J can overflow, and decide_dsf refused the set; so did a member whose
+    static curve meets the points exactly (J_SF 0). The rule chooses what it chooses in ordinary units."""
+    from graybox import StaticPoints, decide_dsf, parse_structure
+
+    def chosen(k):
+        u, y = first_order_signals(200, 0, noise=0.1)
+        ub = np.array([-0.5, 0.0, 0.5])
+        st = parse_structure(["y(k-1)", "u(k-1)"])
+        th = np.array([[0.5, 1.0], [0.45, 1.0], [1.3, 1.0]]) * [1, 2.0**k]
+        pset = ParetoSet.from_thetas(st, th, [0.5, 0.7, 0.9], Record(u, y * 2.0**k, Ts=1.0),
+                                     StaticPoints(ub, 2 * ub * 2.0**k))
+        return decide_dsf(pset, band=np.ldexp(0.5, 2 * k)).index
+
+    assert chosen(e) == chosen(0) == 0

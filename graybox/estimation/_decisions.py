@@ -24,7 +24,7 @@ from ..models._model import Model
 from ._pareto import ParetoSet, members_js
 from ..core._records import (Record, RecordPrint, check_overlap, check_print_overlap, choosing_records, require_lengths,
                              same_record)
-from ..core._least_squares import binary_exponent
+from ..core._least_squares import binary_exponent, binary_scaled, scaled_theta
 from ..core._reprs import beside, bound_text, squared_text
 from ..core._regressors import regressor_matrix
 from ..core._simulation import simulate_many
@@ -150,15 +150,31 @@ def check_choosable(pareto: ParetoSet, what: str, needs_jsf: bool = True) -> Non
 def _check_in_float_range(pareto: ParetoSet, what: str, ok: np.ndarray) -> None:
     """``ValueError`` naming ``what`` when the set's output (its fitting records') is so large or small that a J of 0
     or inf may be a mean square beyond the float range (output units²), not a perfect or a diverged member: at
-    y × 2^±700 every J read so, and a rule chose among them without a word."""
-    tops = [float(np.max(np.abs(r.y), initial=0.0)) for r in pareto.fitted_on if isinstance(r, Record)]
-    e = binary_exponent(max(tops, default=0.0))
+    y × 2^±700 every J read so, and a rule chose among them without a word.
+
+    Only a J that is an artefact, and would be read, is refused: below the range a J can only underflow (to 0), above
+    it only overflow (to inf). A J_S is run again on the fitting records times a power of two (a free run that
+    diverges there, or meets them exactly, is no artefact: at y × 2^±505 such a member refused the set); a J_SF
+    (the set keeps no static points) where its reading is lost: two or more members at 0 (their order) or every
+    member at inf."""
+    recs = [r for r in pareto.fitted_on if isinstance(r, Record)]
+    e = binary_exponent(max((float(np.max(np.abs(r.y), initial=0.0)) for r in recs), default=0.0))
     if abs(2 * e) < 1000:  # y² and its mean squares stay well inside the float range (2^±1022)
         return
-    for nm, v in (("J_S", pareto.JS), ("J_SF", pareto.JSF)):
-        off = np.flatnonzero(ok & ((v == 0) | np.isinf(v)))
-        if off.size:
-            i = int(off[0])
+    edge = 0.0 if e < 0 else np.inf  # what a J beyond the range reads here
+    off = np.flatnonzero(ok & (pareto.JS == edge))
+    if off.size and len(recs) == len(pareto.fitted_on):  # the records at hand (not a file's prints): run J_S again
+        scaled, exps = binary_scaled(recs, pareto.structure)
+        th = pareto.thetas[off]
+        js = members_js(pareto.structure, scaled_theta(th, pareto.structure, exps) if exps else th, scaled,
+                        one_step=False)["JS"]
+        off = off[js != edge]
+    jsf = np.flatnonzero(ok & (pareto.JSF == edge))
+    if jsf.size < (2 if e < 0 else max(int(ok.sum()), 1)):
+        jsf = jsf[:0]
+    for nm, v, bad in (("J_S", pareto.JS, off), ("J_SF", pareto.JSF, jsf)):
+        if bad.size:
+            i = int(bad[0])
             raise ValueError(f"{what}: member {i}'s {nm} is {v[i]:g} on an output whose samples reach 2^{e}: its "
                              f"mean squares (output units², about 2^{2 * e} times a relative error's square) are "
                              "beyond the float range in these units, so 0 or inf says nothing of the member; express "
