@@ -300,3 +300,29 @@ def test_a_diverging_or_exact_member_at_a_huge_or_tiny_output_is_no_range_artefa
         return decide_dsf(pset, band=np.ldexp(0.5, 2 * k)).index
 
     assert chosen(e) == chosen(0) == 0
+
+
+@pytest.mark.parametrize("e", [-600, 600])
+def test_a_grid_cells_members_fit_percent_does_not_depend_on_the_outputs_units(e):
+    """At y × 2^-600 every member's validation J_S (about 2^-1200) read 0 and its fit % read 100, a perfect fit
+    made up: fit % is a ratio, the ordinary units' 100 (1 − ‖y − ŷ‖ / ‖y − mean y‖) in any units."""
+    import graybox as gb
+    from graybox.experiments._cell import _members
+
+    u, y = first_order_signals(400, 0, noise=0.1)
+    st = gb.parse_structure(["y(k-1)", "u(k-1)"])
+    ub = np.array([-0.5, 0.0, 0.5])
+    th = np.array([[0.5, 1.0], [0.45, 1.1]])
+    ident, valid = Record(u[:200], y[:200], Ts=1.0), Record(u[200:], y[200:], Ts=1.0)
+    want = []
+    for t in th:  # the free run and the fit % in ordinary units, by hand
+        yh = np.zeros(200)
+        yh[0] = valid.y[0]
+        for k in range(1, 200):
+            yh[k] = t[0] * yh[k - 1] + t[1] * valid.u[k - 1]
+        want.append(100 * (1 - np.linalg.norm(valid.y[1:] - yh[1:]) / np.linalg.norm(valid.y[1:] - valid.y[1:].mean())))
+    s = 2.0**e
+    ident, valid = Record(ident.u, ident.y * s, Ts=1.0), Record(valid.u, valid.y * s, Ts=1.0)
+    pts = gb.StaticPoints(ub, (2 * ub + 0.01) * s)
+    ps = ParetoSet.from_thetas(st, th * [1, s], [0.5, 0.7], ident, pts)
+    np.testing.assert_allclose(_members(ps, gb.Dataset(ident, valid, pts))["fit_valid"], want, rtol=1e-9)

@@ -14,6 +14,7 @@ import os
 import socket
 import time
 import warnings
+from dataclasses import replace
 from typing import Any, Iterable, Mapping
 
 import numba
@@ -24,7 +25,7 @@ from .. import _api as gb
 from ..static._constraints import static_cluster_map
 from ..estimation._decisions import min_jsf_index
 from ..estimation._prediction_error import numerator_surface
-from ..core._least_squares import thread_pools
+from ..core._least_squares import binary_exponent, scaled_theta, thread_pools
 from ..core._validation import check_int
 from ..models._evaluate import fit_or_nan, output_spread
 from ._spec import Cell, build_constraint, canonical_json
@@ -216,15 +217,23 @@ def _members(pareto: gb.ParetoSet, data: gb.Dataset) -> dict[str, Any]:
     """
     K = len(pareto)
     ok = np.array([i not in pareto.failures for i in range(K)], bool)
-    js_valid = np.full(K, np.inf)
+    # on the validation output over the power of two above its largest |y| (exact): there J_S is a float however
+    # large or small y is, and fit % (a ratio) is read from it (at y × 2^-600 J_S read 0 and fit % 100, at
+    # y × 2^600 inf and -inf); J_S is mapped back to output units² (inf or 0 only where it is no float)
+    e = binary_exponent(np.max(np.abs(data.valid.y), initial=0.0))
+    valid = replace(data.valid, y=np.ldexp(data.valid.y, -e))
+    js_unit = np.full(K, np.inf)
     if ok.any():
-        js_valid[ok] = gb.evaluate_thetas(pareto.structure, pareto.thetas[ok], data.valid, one_step=False)["JS"]
+        th = scaled_theta(pareto.thetas[ok], pareto.structure, {"y": e, "e": e})
+        js_unit[ok] = gb.evaluate_thetas(pareto.structure, th, valid, one_step=False)["JS"]
+    with np.errstate(over="ignore", under="ignore"):
+        js_valid = np.ldexp(js_unit, 2 * e)
     # fit % from J_S as gb.fit_percent defines it: 100 (1 − ‖y − ŷ‖ / ‖y − mean(y)‖) from sample L on;
     # NaN where a held (constant) validation output leaves it undefined
-    y = data.valid.y[pareto.structure.max_lag:]
+    y = valid.y[pareto.structure.max_lag:]
     spread = output_spread(y)
-    with np.errstate(invalid="ignore"):  # √J_S √N: J_S N overflowed where ‖y − ŷ‖ is a float
-        fit = 100.0 * (1.0 - np.sqrt(js_valid) * np.sqrt(y.size) / spread) if spread > 0 else np.full(K, np.nan)
+    with np.errstate(invalid="ignore"):
+        fit = 100.0 * (1.0 - np.sqrt(js_unit * y.size) / spread) if spread > 0 else np.full(K, np.nan)
     figures = {"lambda1": pareto.lambdas, "J1": pareto.J1, "JS": pareto.JS, "JSF": pareto.JSF, "JS_valid": js_valid,
                "fit_valid": fit}
     out: dict[str, Any] = {k: np.array(v, dtype=np.float64) for k, v in figures.items()}  # copies, own memory
