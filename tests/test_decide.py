@@ -176,3 +176,20 @@ def test_min_correlation_has_no_units(e):
         out.append([gb.decide_min_correlation(ps, valid, output=o) for o in ("one-step", "free-run")])
     for base, far in zip(*out):
         assert far.index == base.index and far.score == pytest.approx(base.score, rel=1e-12) and base.score > 0.01
+
+
+def test_min_correlation_with_a_square_of_the_output_at_y_times_2_to_the_512():
+    """At y × 2^512 a set of y(k-1), u(k-1), y(k-1)² held J's that are floats (about 2^1018), but
+    decide_min_correlation refused it: the regressor y(k-1)² (about 2^1026) overflowed in the data's own units.
+    ρ has no units: the member and its ρ are those of ordinary units."""
+    import graybox as gb
+
+    u, y = first_order_signals(200, 0, noise=0.1)
+    st = gb.parse_structure(["y(k-1)", "u(k-1)", "y(k-1)^2"])
+    got = []
+    for e in (0, 512):
+        th = np.array([[0.5, 1.0, 0.01], [0.45, 1.1, 0.0], [0.4, 1.0, 0.05]]) * [1, 2.0**e, 2.0**-e]
+        rec = gb.Record(u, y * 2.0**e, Ts=1.0)
+        got.append(gb.decide_min_correlation(ParetoSet.from_thetas(st, th, [0.5, 0.7, 0.9], rec, None), rec))
+    assert got[1].index == got[0].index
+    assert got[1].score == pytest.approx(got[0].score, rel=1e-9)

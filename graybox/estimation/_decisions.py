@@ -383,18 +383,22 @@ def decide_min_correlation(
     if len(record) - L < 3:  # two points are always perfectly correlated (ρ = 1 for every member), one is undefined
         raise ValueError(f"record: {len(record) - L} sample(s) after the largest lag {L}; a correlation needs 3 "
                          "or more")
-    y = record.y[L:]
-    psi = regressor_matrix(st, record.u, record.y, start=L, input_names=record.input_names)
+    # ρ has no units: on the signals times powers of two (exact) where a regressor leaves the float range in the
+    # data's own (y(k-1)² at y × 2^512 refused a set whose J's are floats)
+    (scaled,), exps = binary_scaled([record], st)
+    thetas = scaled_theta(pareto.thetas, st, exps) if exps else pareto.thetas
+    y = scaled.y[L:]
+    psi = regressor_matrix(st, scaled.u, scaled.y, start=L, input_names=scaled.input_names)
     K = len(pareto)
     rho = np.empty(K)
     diverged = np.zeros(K, bool)
     # members in blocks of at most ~2^22 samples of output: bounded memory on long records
     step = max(1, (1 << 22) // max(1, y.size))
     for k0 in range(0, K, step):
-        th = pareto.thetas[k0 : k0 + step]
+        th = thetas[k0 : k0 + step]
         Y1 = psi @ th.T  # (N-L, block)
         xi = y[:, None] - Y1
-        Yo = Y1 if output == "one-step" else np.asarray(simulate_many(st, th, record)).T[L:]
+        Yo = Y1 if output == "one-step" else np.asarray(simulate_many(st, th, scaled)).T[L:]
         with np.errstate(all="ignore"):
             xc = xi - xi.mean(axis=0)
             oc = Yo - Yo.mean(axis=0)
@@ -413,7 +417,8 @@ def decide_min_correlation(
         gone = f" ({int(diverged.sum())} of {K} members' free runs diverged)" if diverged.any() else ""
         raise ValueError(f"no member has a defined residual/output correlation on this record{gone}: the members' "
                          f"{output} output or one-step residuals are constant over it, as on a record that does not "
-                         f"move (held at a steady state; its output's spread is {float(np.ptp(y)):.3g}); give a "
+                         "move (held at a steady state; its output's spread is "
+                         f"{float(np.ptp(record.y[L:])):.3g}); give a "
                          "record whose input moves")
     i = int(np.argmin(rho))
     return _decision(pareto, i, "min correlation", True, rho[i], f"{pareto.method} min-corr (ρ = {rho[i]:.3g})")
