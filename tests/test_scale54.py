@@ -350,3 +350,27 @@ def test_evaluate_thetas_gives_the_js_of_ordinary_units_near_the_float_ranges_en
     for name in ("J1", "JS", "JSF"):
         np.testing.assert_allclose(np.ldexp(got[name], -2 * ky), base[name], rtol=1e-9, err_msg=name)
     np.testing.assert_allclose(np.ldexp(alone["JSF"], -2 * ky), base["JSF"], rtol=1e-9)
+
+
+def test_evaluate_thetas_names_static_points_of_other_inputs_at_y_times_2_to_the_512():
+    """Static points of inputs ('c', 'd') beside a record of ('a', 'b'): in ordinary units a ValueError naming
+    both; at y × 2^512 (evaluated on scaled signals) a bare KeyError 'c'."""
+    u = np.column_stack([np.linspace(0.5, 2.0, 40), np.linspace(2.0, 0.5, 40)])
+    y = np.ldexp(np.linspace(1.0, 3.0, 40), 512)
+    s = gb.parse_structure(["y(k-1)", "a(k-1)", "b(k-1)"])
+    pts = gb.StaticPoints(np.array([[1.0, 1.0], [1.5, 0.7]]), np.ldexp([1.0, 1.6], 512), input_names=("c", "d"))
+    with pytest.raises(ValueError, match=r"inputs \('a', 'b'\) but the static points have \('c', 'd'\)"):
+        gb.evaluate_thetas(s, np.ldexp([0.5, 0.3, 0.2], [0, 512, 512]), gb.Record(u, y, input_names=("a", "b")), pts)
+
+
+def test_evaluate_thetas_at_static_points_named_otherwise_for_one_input_at_y_times_2_to_the_512():
+    """One input's static points may carry another name than the structure's input (StaticPoints' default 'u'
+    beside terms of 'a'): in ordinary units J_SF is 0.325; at y × 2^512 the points alone set the exponents under
+    their own name, ū was scaled and the a(k-1) parameter not, and J_SF read 0.90625 × 2^1024 (a ParetoSet's too)."""
+    s = gb.parse_structure(["y(k-1)", "a(k-1)"])
+    ub, yb = np.array([1.0, 1.5]), np.array([1.0, 1.6])
+    # by hand: the equilibrium of y = 0.5 y + 0.3 ū is ȳ = 0.6 ū
+    want = np.mean((0.6 * ub - yb) ** 2)
+    for k in (0, 512):
+        got = gb.evaluate_thetas(s, np.ldexp([0.5, 0.3], [0, k]), None, gb.StaticPoints(ub, np.ldexp(yb, k)))["JSF"]
+        assert np.ldexp(got[0], -2 * k) == pytest.approx(want, rel=1e-12)

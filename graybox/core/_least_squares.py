@@ -405,7 +405,8 @@ def scaled_points(points: StaticPoints, exps: Mapping[str, int]) -> StaticPoints
     """Static points on the signals times 2^-e (as :func:`scaled_theta`'s): ȳ by y's exponent, ū by its input's."""
     ub = np.asarray(points.ubar, float)
     names = [n for n in exps if n not in ("y", "e")]
-    d = exps[names[0]] if ub.ndim == 1 else np.array([exps[n] for n in points.input_names])
+    # an input the exponents do not name is left as it is: the caller refuses points of other inputs, in its words
+    d = exps[names[0]] if ub.ndim == 1 else np.array([exps.get(n, 0) for n in points.input_names])
     return replace(points, ubar=np.ldexp(ub, -d), ybar=np.ldexp(np.asarray(points.ybar, float), -exps["y"]))
 
 

@@ -320,8 +320,12 @@ def evaluate_thetas(
     if record is not None:
         (record,), exps = binary_scaled([record], structure)
     elif static is not None:  # the static points alone set the exponents
+        # one input's points are read whatever their input's name (StaticPoints' default 'u' beside terms of 'a'):
+        # the exponent then goes by the structure's name, which scaled_theta reads
+        one = static.n_inputs == 1 and len(structure.input_names) == 1
         exps = binary_scaled([Record(np.asarray(static.ubar, float), np.asarray(static.ybar, float),
-                                     input_names=static.input_names)], structure)[1]
+                                     input_names=structure.input_names if one else static.input_names)],
+                             structure)[1]
     if exps:
         th = scaled_theta(th, structure, exps)
         static = None if static is None else scaled_points(static, exps)
