@@ -374,3 +374,48 @@ def test_evaluate_thetas_at_static_points_named_otherwise_for_one_input_at_y_tim
     for k in (0, 512):
         got = gb.evaluate_thetas(s, np.ldexp([0.5, 0.3], [0, k]), None, gb.StaticPoints(ub, np.ldexp(yb, k)))["JSF"]
         assert np.ldexp(got[0], -2 * k) == pytest.approx(want, rel=1e-12)
+
+
+def test_uncertainty_at_y_times_2_to_the_512_is_the_ordinary_units_one_scaled():
+    """At y × 2^512 the variances are floats (about 2^1024 times the ordinary units' 1e-6), but cls_uncertainty and
+    ls_uncertainty warned 'overflow encountered in dot' (an error under warnings-as-errors): the stationarity check
+    took the norms of the fitted values and the output (about 2^516) in the data's own units."""
+    u, y = _plant()
+
+    def sds(ky):
+        rec, pts = gb.Record(u, np.ldexp(y, ky)), _qp_points(ky, 0)
+        cls = gb.cls_uncertainty(gb.cls(_QP_TERMS, rec, pts, how="points").model, rec, pts, how="points")
+        ls = gb.ls_uncertainty(gb.els(_QP_TERMS, rec, noise=0).model, rec)
+        return [np.sqrt(np.diag(c.cov)) for c in (cls, ls)]
+
+    base = sds(0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        far = sds(512)
+    for b, f in zip(base, far):
+        np.testing.assert_allclose(f[1:], _powers_of_two(b, _QP_TERMS, 512, 0)[1:], rtol=1e-6)
+
+
+def test_pe_uncertainty_at_y_times_2_to_the_512_is_the_ordinary_units_one_scaled():
+    """pe_uncertainty at y × 2^512 warned 'overflow encountered in dot' (an error under warnings-as-errors) in the
+    norms of the static points' ȳ (about 2^513) where the variances are floats."""
+    rng = np.random.default_rng(3)
+    u = np.repeat(rng.uniform(0.0, 2.0, 40), 10)
+    y = np.zeros(u.size)
+    for k in range(1, u.size):
+        y[k] = 0.5 * y[k - 1] + 0.3 * u[k - 1] + 0.1 * u[k - 1] ** 2
+    y += 0.02 * rng.standard_normal(u.size)
+    ub = np.linspace(0.1, 1.9, 6)
+    terms = ["y(k-1)", "u(k-1)", "u(k-1)^2"]
+
+    def sds(ky):
+        yb = (0.3 * ub + 0.1 * ub**2) / 0.5 + 0.01
+        rec, pts = gb.Record(u, np.ldexp(y, ky)), gb.StaticPoints(ub, np.ldexp(yb, ky))
+        member = gb.pe_pareto(terms, rec, pts, lambdas=[0.3]).models()[0]
+        return np.sqrt(np.diag(gb.pe_uncertainty(member, rec, pts, lambda1=0.3).cov))
+
+    base = sds(0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        far = sds(512)
+    np.testing.assert_allclose(far, _powers_of_two(base, terms, 512, 0), rtol=1e-6)

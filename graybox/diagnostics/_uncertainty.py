@@ -62,7 +62,8 @@ from ..static._surfaces import StaticSurface
 from ..estimation._decisions import Decision
 from ..models._coerce import as_model, records_of, static_info, static_points
 from ..models._model import Model
-from ..core._least_squares import binary_exponent, check_rows, one_blas_thread, rank_tolerance, scaled_norms
+from ..core._least_squares import (binary_exponent, check_rows, one_blas_thread, rank_tolerance, scaled_norm,
+                                   scaled_norms)
 from ..core._simulation_kernels import free_run_sensitivity_blocks, inverse_ma_filter
 from ..core._terms import Structure, check_input_names
 from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, check_units, require_lengths
@@ -419,7 +420,7 @@ def _free_pivots(C: np.ndarray, k: int) -> list[int] | None:
     columns right of it (the orthogonal complement's echelon from the right): decided on C, whose pinned
     directions are exact, where F holds them only as round-off of zero. Each column is judged relative to
     its own norm (units scale columns), with rows normalised and the rank rule of :func:`_null_space`."""
-    norms = np.linalg.norm(C, axis=1)
+    norms = scaled_norms(C, axis=1)  # rows of a static point's ȳ about 2^512 overflowed in their squares
     C = C[norms > 0] / norms[norms > 0, None]
     n = C.shape[1]
     basis = np.zeros((C.shape[0], 0))
@@ -481,7 +482,7 @@ def _null_space(A: np.ndarray, n: int, rank: int | None = None) -> tuple[np.ndar
     decided for these rows (:func:`~graybox.estimation._prediction_error.centred_eq_rank`), else the 1e-10 cut."""
     if A.shape[0] == 0:
         return np.eye(n), 0
-    norms = np.linalg.norm(A, axis=1)
+    norms = scaled_norms(A, axis=1)  # rows of a static point's ȳ about 2^512 overflowed in their squares
     A = A[norms > 0] / norms[norms > 0, None]
     if A.shape[0] == 0:
         return np.eye(n), 0
@@ -589,8 +590,10 @@ def _check_stationary(Z: np.ndarray, A: np.ndarray, r: np.ndarray, rest2: float,
     if Z.shape[1] == 0:
         return  # the constraints fix θ: nothing left to optimise
     U, S, _ = np.linalg.svd(A @ Z, full_matrices=False)
-    g = float(np.linalg.norm(U[:, S > rank_tolerance(S[0], rows, S.size)].T @ r)) if S.size and S[0] > 0 else 0.0
-    whole = float(np.sqrt(r @ r + rest2))
+    # norms over powers of two (scaled_norm): residuals and fitted values about 2^516 (y × 2^512) overflowed in
+    # their squares where the norms and the variances are floats
+    g = scaled_norm(U[:, S > rank_tolerance(S[0], rows, S.size)].T @ r) if S.size and S[0] > 0 else 0.0
+    whole = float(np.hypot(scaled_norm(r), np.sqrt(rest2)))
     cancel = 0.0 if z is None else 1e-15 * float(np.linalg.norm(A, 2) * np.linalg.norm(z))
     if z_round is not None:
         cancel += float(np.linalg.norm(np.abs(A) @ z_round))
@@ -601,7 +604,7 @@ def _check_stationary(Z: np.ndarray, A: np.ndarray, r: np.ndarray, rest2: float,
 
 def _size(*parts: np.ndarray) -> float:
     """The magnitude of a fit's parts: what round-off is measured against."""
-    return float(sum(np.linalg.norm(p) for p in parts))
+    return float(sum(scaled_norm(np.ravel(p)) for p in parts))
 
 
 def _check_level(level: float) -> float:
@@ -1149,7 +1152,7 @@ def _static_sigma2(Z: np.ndarray, A2: np.ndarray, QR: np.ndarray, wB: np.ndarray
     M = QR.shape[0]
     top = float(g @ g)
     # met exactly (to round-off of ȳ), e.g. by constraints through the points: no noise is left to estimate
-    exact = np.sqrt(float(s @ s)) <= 1e-10 * float(np.linalg.norm(g * ybar))
+    exact = scaled_norm(s) <= 1e-10 * scaled_norm(g * ybar)  # over powers of two: ȳ about 2^512 overflowed
     nu = 0.0 if exact else top
     if Z.shape[1] and not exact:
         _, S, Vt = np.linalg.svd(A2 @ Z, full_matrices=False)  # (ZᵀA2ᵀA2Z)⁻¹ = V S⁻² Vᵀ, never formed (cond²)
