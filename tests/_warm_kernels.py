@@ -44,6 +44,15 @@ def simulation() -> None:
     for threads in (1, 2):
         K.simulate_batch(code, np.vstack([th] * 8), u, y, 3, threads=threads, bounded=True)
         K.batch_sse(code, np.vstack([th] * 8), u, y, 3, threads=threads, bounded=True)
+    # a feedback through a second input at lag 3, growing: the steady gain stops its runs, which are run again by the
+    # lattice margin (the lattice kernels)
+    a = -np.real(np.poly([1.001 * np.exp(3.13j), 1.001 * np.exp(-3.13j), 0.5]))[1:]
+    res = K.encode(gb.parse_structure(["y(k-1)", "y(k-2)", "y(k-3)v(k-1)", "u(k-1)"]), ("u", "v"))
+    uv = np.column_stack([np.sin(3.13 * np.arange(4000)), np.ones(4000)])
+    K.simulate_one(res, np.r_[a, 1.0], uv, np.zeros(3), 3, None)
+    K.predict_ahead(res, np.r_[a, 1.0], uv, np.zeros(4000), 3, 4000, None)
+    K.simulate_batch(res, np.vstack([np.r_[a, 1.0]] * 2), uv, np.zeros(3), 3, bounded=True)
+    K.batch_sse(res, np.vstack([np.r_[a, 1.0]] * 2), uv, np.zeros(4000), 3, bounded=True)
     K.free_run_sensitivity(code, th, u, y[:3], 3)
     for _ in K.free_run_sensitivity_blocks(code, th, K.input_products(code.fptr, code.fsig, code.flag, code.fpow, u, 3),
                                            y[:3], 3, block=64):

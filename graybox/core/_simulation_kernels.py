@@ -322,6 +322,57 @@ def pole_margin(a1, a2):  # pragma: no cover - compiled
     return max(pm, 2.2250738585072014e-308) if inside else 2.0
 
 
+@nb.njit(cache=True, nogil=True)
+def lattice_margin(a, w):  # pragma: no cover - compiled
+    """1 / a bound on Σ|h| of y(k) = Σ_l a_l y(k−l) + push, l = 1 … L (``a`` a 1-D view of length L), where every pole
+    lies inside the unit circle; else 2 (dimensionless): :func:`linear_margins`' rule for a feedback through the
+    inputs that reads a lag beyond 2, at the samples of a run the steady gain alone would stop. ``w`` is a work array
+    of at least L floats.
+
+    The Schur–Cohn step-down of A(z) = 1 − Σ a_l z^−l gives its reflection coefficients k_L … k_1 (every |k_m| < 1
+    exactly when every pole is inside), and on the unit circle |A_m| >= (1 − |k_m|) |A_(m−1)| (the step-up
+    A_m(z) = A_(m−1)(z) + k_m z^−m A_(m−1)(1/z), whose two parts have one modulus there), so
+    sup_ω 1/|A(e^{jω})| <= 1 / Π (1 − |k_m|); and Σ|h| <= (2L + 1) sup_ω |H| for a system of order L (Boyd and
+    Doyle's peak-to-peak bound), hence the margin Π (1 − |k_m|) / (2L + 1), or 1 − Σ|a_l| where that is larger
+    (Σ|h| <= 1 / (1 − Σ|a_l|), the small-gain bound: tighter for a plant of real positive poles). A lightly damped
+    pair driven at its own frequency builds up to sup |H| ≫ 1/D, which the steady gain 1/D of :func:`push_gain`
+    does not cover."""
+    L = a.shape[0]
+    small = 1.0
+    for i in range(L):
+        w[i] = -a[i]  # A's coefficients α_1 … α_L of z^−1 … z^−L
+        small -= abs(a[i])
+    prod = 1.0
+    for m in range(L, 0, -1):
+        k = w[m - 1]
+        if not abs(k) < 1.0:  # a pole on or outside the unit circle (NaN: not inside)
+            return 2.0
+        prod *= 1.0 - abs(k)
+        s = 1.0 - k * k
+        for i in range((m - 1) // 2 + 1):  # α_i ← (α_i − k α_(m−i)) / (1 − k²), i = 1 … m − 1, in pairs
+            j = m - 2 - i
+            if i > j:
+                break
+            lo, hi = w[i], w[j]
+            w[i] = (lo - k * hi) / s
+            w[j] = (hi - k * lo) / s
+    return max(prod / (2.0 * L + 1.0), small, 2.2250738585072014e-308)
+
+
+@nb.njit(cache=True, nogil=True)
+def _lattice_push_margin(a, w):  # pragma: no cover - compiled
+    # 1 / push_gain of a feedback through the inputs that reads a lag beyond 2 (linear_margins' −2), ``a`` that
+    # sample's a_1 … a_L: lattice_margin where every pole is inside, else the steady gain's margin (the fast path's,
+    # _push_margin at margin 1); never above the latter (lattice_margin <= 1 / Σ|h| <= 1 / |Σh| = D where stable),
+    # so a run the fast path lets through, this lets through too, and only runs it stops need this
+    s = 0.0
+    for i in range(a.shape[0]):
+        s += a[i]
+    d = _push_margin(s, 0.0, 1.0)
+    lm = lattice_margin(a, w)
+    return lm if lm < d else d
+
+
 @nb.njit(cache=True, nogil=True, inline="always")
 def push_gain(c1, c2, margin):  # pragma: no cover - compiled
     """How far the linear output feedback at a sample amplifies the push (dimensionless); ``margin`` is
@@ -363,7 +414,10 @@ def linear_margins(code: Code, thetas: np.ndarray) -> np.ndarray:
     the unit circle, 2 where one does not (no steady level, whatever D: :func:`push_gain` then keeps the push's own
     scale), 1 where θ is not finite. Where a term y(k−l) · (inputs) feeds back too, the constant terms are no account
     of the feedback: −1 where no single past output lies beyond lag 2 (:func:`push_gain` reads the poles of the
-    feedback at each sample's inputs), else 1 (its steady gain at each sample). Shape (P,), in (0, 2] or −1.
+    feedback at each sample's inputs), else −2: the run is judged by the steady gain at each sample first (the
+    margin 1, the fast path), and a run that judgement stops is run again with :func:`lattice_margin` of each
+    sample's feedback (a step-down per sample, paid only by the runs that would otherwise be stopped). Shape (P,),
+    in (0, 2], −1 or −2.
 
     A push X bounded by |X| <= x holds a stable linear recursion at |y| <= x Σ_j |h(j)| <= x Π 1 / (1 − |p|): for
     real positive poles that is the steady gain 1 / D of :func:`push_gain`, but a lightly damped pair driven at its
@@ -378,7 +432,7 @@ def linear_margins(code: Code, thetas: np.ndarray) -> np.ndarray:
     lags = [int(code.ylag[t, 0]) for t in single]
     L = max(lags)
     if any(code.uptr[t] != code.uptr[t + 1] for t in single):
-        return out if L > 2 else np.where(np.all(np.isfinite(th), axis=1), -1.0, 1.0)
+        return np.where(np.all(np.isfinite(th), axis=1), -1.0 if L <= 2 else -2.0, 1.0)
     if th.shape[0] == 1 and L <= 2:  # one run's (simulate, predict): the poles in floats, no array work
         c = [0.0, 0.0]
         for t, l in zip(single, lags):
@@ -422,6 +476,9 @@ def _start_ref(y, start):  # pragma: no cover - compiled
 def _feedback_margins(C, gny, gylag, mm, D, E, margin):  # pragma: no cover - compiled
     # D[i] = 1 / push_gain at the samples i < mm, from the coefficients C_g of the single past outputs (monomials
     # of output power 1) summed by lag (1 in D, 2 and beyond in E); loops over the samples (vectorised)
+    if margin < -1.5:  # the feedback through the inputs reads a lag beyond 2: every lag's sum, sample by sample
+        _lattice_margins(C, gny, gylag, mm, D)
+        return
     for i in range(mm):
         D[i] = 0.0
         E[i] = 0.0
@@ -437,11 +494,37 @@ def _feedback_margins(C, gny, gylag, mm, D, E, margin):  # pragma: no cover - co
         D[i] = _push_margin(D[i], E[i], margin)
 
 
+@nb.njit(cache=True, nogil=True, inline="always")
+def _single_lags(gny, gylag):  # pragma: no cover - compiled (inlined)
+    # the largest lag of a single past output y(k−l) among the monomials (gny, gylag) or the terms (ny, ylag); 0: none
+    L = 0
+    for g in range(gny.shape[0]):
+        if gny[g] == 1 and gylag[g, 0] > L:
+            L = gylag[g, 0]
+    return L
+
+
+@nb.njit(cache=True, nogil=True)
+def _lattice_margins(C, gny, gylag, mm, D):  # pragma: no cover - compiled
+    # D[i] = 1 / push_gain at the samples i < mm by _lattice_push_margin of that sample's a_l (every lag's sum of C_g)
+    L = _single_lags(gny, gylag)
+    a = np.empty(L)
+    w = np.empty(L)
+    for i in range(mm):
+        for l in range(L):
+            a[l] = 0.0
+        for g in range(gny.shape[0]):
+            if gny[g] == 1:
+                a[gylag[g, 0] - 1] += C[g, i]
+        D[i] = _lattice_push_margin(a, w)
+
+
 @nb.njit(cache=True, nogil=True)
 def _one(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y0, start, bound, auto, scale,
          margin):  # pragma: no cover - compiled
     # uflat: the (m, n) inputs flattened, input i at uflat[i*n:(i+1)*n]; 1-D slices of a 1-D
-    # array keep the pass-1 loops as the single-input kernel had them (unit stride, vectorised)
+    # array keep the pass-1 loops as the single-input kernel had them (unit stride, vectorised).
+    # Returns (y, cut): cut where the bound stopped the run at a finite sample (see _rerun).
     G = gny.shape[0]
     y = np.empty(n)
     for k in range(start):
@@ -472,9 +555,26 @@ def _one(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y0, start, bo
             if not (abs(acc) <= bound):
                 for j in range(k, n):
                     y[j] = np.nan
-                return y
+                return y, abs(acc) < np.inf
             y[k] = acc
-    return y
+    return y, False
+
+
+def _fast(margin: float) -> float:
+    """The margin a run is judged by first: :func:`linear_margins`' −2 (a feedback through the inputs reading a lag
+    beyond 2) is judged by the steady gain (margin 1) and run again only where that stops it (:func:`_rerun`)."""
+    return 1.0 if margin < -1.5 else margin
+
+
+def _rerun(margin: float, cut: bool) -> bool:
+    """Whether a run the fast margin (:func:`_fast`) stopped at a finite sample is to be run again with
+    ``margin``: the steady gain 1/D bounds a stable feedback's response to a constant push, not to one at the
+    feedback's resonance (poles 0.9999999 e^{±j(π − 0.01)} and 0.5 through y(k−3)·v(k−1), driven at the pair's
+    frequency, build up to 10⁸ × the push where 1/D = 0.5); :func:`lattice_margin` bounds it for any push. It is
+    never above the steady gain's margin, so a run the fast path lets through it lets through too and the two
+    passes are the lattice bound's run exactly; the step-down per sample costs only the runs that would otherwise
+    be stopped (a diverging run, stopped again where the lattice bound stops it)."""
+    return margin < -1.5 and bool(cut)
 
 
 def simulate_one(code: Code, theta: np.ndarray, u: np.ndarray, y0: np.ndarray, start: int,
@@ -488,9 +588,11 @@ def simulate_one(code: Code, theta: np.ndarray, u: np.ndarray, y0: np.ndarray, s
     uc = kernel_inputs(code, u)
     scale = feedback_scale(code, theta, u) if bound is None else 0.0
     margin = float(linear_margins(code, theta)[0]) if bound is None else 1.0
-    return _one(code.uptr, code.ulag, code.upow, code.usig, code.grp, code.gny, code.gylag, kernel_array(theta),
-                uc.reshape(-1), uc.shape[1], kernel_array(y0), start, 0.0 if bound is None else float(bound),
-                bound is None, scale, margin)
+    args = (code.uptr, code.ulag, code.upow, code.usig, code.grp, code.gny, code.gylag, kernel_array(theta),
+            uc.reshape(-1), uc.shape[1], kernel_array(y0), start, 0.0 if bound is None else float(bound),
+            bound is None, scale)
+    y, cut = _one(*args, _fast(margin))
+    return _one(*args, margin)[0] if _rerun(margin, cut) else y
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -514,6 +616,8 @@ def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, h
     # The input-only parts X(k), C_g(k) once over the record; the samples before start + horizon - 1
     # by one free run from the record's start; every later sample t by a recursion of ``horizon``
     # steps from the measured outputs before t - horizon + 1: O(N min(horizon, N - horizon)) steps.
+    # Returns (ŷ, cut): cut where the bound stopped a run at a finite sample (see _rerun).
+    cut = False
     m = n - start
     X = np.empty(m)  # X[k - start], C[:, k - start]: sample k
     C = np.empty((gny.shape[0], m))
@@ -543,6 +647,7 @@ def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, h
         if not gone:
             acc = _monomials_step(X, C, gny, gylag, buf, k - start, k)
             if not (abs(acc) <= (scaled_bound(max(start_ref, P[k - start])) if auto else bound)):
+                cut = cut or abs(acc) < np.inf
                 acc = np.nan
                 gone = True
         buf[k] = acc
@@ -557,11 +662,12 @@ def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, h
             j = start + k - s
             acc = _monomials_step(X, C, gny, gylag, buf, k - start, j)
             if not (abs(acc) <= (scaled_bound(max(w, P[k - start])) if auto else bound)):
+                cut = cut or abs(acc) < np.inf
                 acc = np.nan
                 break
             buf[j] = acc
         out[t] = acc
-    return out
+    return out, cut
 
 
 def predict_ahead(code: Code, theta: np.ndarray, u: np.ndarray, y: np.ndarray, start: int, horizon: int,
@@ -579,9 +685,11 @@ def predict_ahead(code: Code, theta: np.ndarray, u: np.ndarray, y: np.ndarray, s
     uc = kernel_inputs(code, u)
     scale = feedback_scale(code, theta, u) if bound is None else 0.0
     margin = float(linear_margins(code, theta)[0]) if bound is None else 1.0
-    return _ahead(code.uptr, code.ulag, code.upow, code.usig, code.grp, code.gny, code.gylag,
-                  kernel_array(theta), uc.reshape(-1), uc.shape[1], kernel_array(y), start, horizon,
-                  0.0 if bound is None else float(bound), bound is None, scale, margin)
+    args = (code.uptr, code.ulag, code.upow, code.usig, code.grp, code.gny, code.gylag, kernel_array(theta),
+            uc.reshape(-1), uc.shape[1], kernel_array(y), start, horizon, 0.0 if bound is None else float(bound),
+            bound is None, scale)
+    out, cut = _ahead(*args, _fast(margin))
+    return _ahead(*args, margin)[0] if _rerun(margin, cut) else out
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -589,7 +697,7 @@ def _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, cacc, bounded):  # pragma:
     # acc[p] = ŷ_p(k) for every member p, reading past outputs from rows (k - lag) & mask of Y;
     # when ``bounded`` also xacc[p] = X_p(k), the sum of the terms without y, and cacc[0, p], cacc[1, p] the sums of
     # the coefficients of its single past outputs at sample k of lag 1 and of the others (for the bound:
-    # :func:`push_gain`).
+    # :func:`push_gain`); a cacc of more rows holds one per lag (the lattice pass, linear_margins' −2).
     # The accumulator is a separate array, every access is 2-D indexed and every population
     # loop runs over the whole second axis (range(P) with P = Y.shape[1]): in this form LLVM
     # vectorises each term update, which a loop over a sub-range p0:p1 does not (BENCHMARKS.md).
@@ -600,8 +708,9 @@ def _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, cacc, bounded):  # pragma:
     if bounded:
         for p in range(P):
             xacc[p] = 0.0
-            cacc[0, p] = 0.0
-            cacc[1, p] = 0.0
+        for r in range(cacc.shape[0]):  # rows outermost: each a unit-stride loop over the population
+            for p in range(P):
+                cacc[r, p] = 0.0
     for t in range(nt):
         c = U[k, t]
         m = ny[t]
@@ -617,7 +726,7 @@ def _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, cacc, bounded):  # pragma:
         elif m == 1:
             a = (k - ylag[t, 0]) & mask
             if bounded:
-                r = 0 if ylag[t, 0] == 1 else 1
+                r = min(ylag[t, 0], cacc.shape[0]) - 1  # 2 rows: lag 1, the others; more: one per lag
                 for p in range(P):
                     v = thT[t, p] * c
                     acc[p] += v * Y[a, p]
@@ -655,20 +764,43 @@ def _bound_start(ref):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def _bound_members(ref, bnd, xacc, cacc, acc, margin, poles):  # pragma: no cover - compiled
+def _bound_members(ref, bnd, xacc, cacc, acc, margin, poles, cut):  # pragma: no cover - compiled
     # The default bound of _one for every member p: its scale ref[p] grows with G_p(k) |X_p(k)| (xacc, the
     # sum of its terms without y; G_p(k) the push_gain of its linear feedback at sample k, cacc[:, p]), and a
     # sample beyond BOUND_FACTOR × that scale is NaN, and so is every later one, as _one stops there: a stopped
     # member's bound is -1 for good (its NaN need not reach a later sample, e.g. y(k) = a y(k-2) reads only every
     # other one). ``poles``: some member's margin is -1 (the structure's feedback runs through the inputs): every
     # member's is then -1 but a padding member's (θ = 0: the poles' margin is 1 too) or a non-finite one's (not
-    # inside: the same 1), so one loop serves them all, without a branch per member.
+    # inside: the same 1), so one loop serves them all, without a branch per member. cut[p]: the bound stopped
+    # member p at a finite sample (linear_margins' −2, judged here by the steady gain: see _rerun).
     P = acc.shape[0]
     for p in range(P):
         x = abs(xacc[p])
         d = pole_margin(cacc[0, p], cacc[1, p]) if poles else _push_margin(cacc[0, p], cacc[1, p], margin[p])
         d = d if d <= 1.0 else 1.0
         if x > ref[p] * d:  # off the common path: a division only where the scale grows
+            ref[p] = x / d
+            bnd[p] = scaled_bound(ref[p])
+        if not (abs(acc[p]) <= bnd[p]):
+            if bnd[p] >= 0.0 and abs(acc[p]) < np.inf:
+                cut[p] = True
+            acc[p] = np.nan
+            ref[p] = np.inf
+            bnd[p] = -1.0
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def _bound_lattice(ref, bnd, xacc, cacc, acc, a, w):  # pragma: no cover - compiled
+    # _bound_members in the lattice pass (linear_margins' −2, the members the steady gain stopped: see _rerun):
+    # cacc holds a row per lag, each member's a_l, read by _lattice_push_margin (``a``, ``w``: work rows). Kernels
+    # of their own: a branch to it in _bound_members' loop, even one never taken, slowed every bounded batch run by
+    # 10–20 %.
+    for p in range(acc.shape[0]):
+        for r in range(cacc.shape[0]):
+            a[r] = cacc[r, p]
+        d = _lattice_push_margin(a, w)
+        x = abs(xacc[p])
+        if x > ref[p] * d:
             ref[p] = x / d
             bnd[p] = scaled_bound(ref[p])
         if not (abs(acc[p]) <= bnd[p]):
@@ -680,7 +812,7 @@ def _bound_members(ref, bnd, xacc, cacc, acc, margin, poles):  # pragma: no cove
 @nb.njit(cache=True, nogil=True)
 def _batch_block(thT, U, ny, ylag, Y, start, ref, margin):  # pragma: no cover - compiled
     # ``ref`` (P,): each member's starting scale, for the default bound; empty: no bound; ``margin`` (P,):
-    # linear_margins
+    # linear_margins (no −2: see _rerun). Returns cut (P,), _bound_members'.
     n, P = Y.shape
     mask = -1  # all ones: (k - lag) & mask == k - lag, the whole record is kept
     acc = np.empty(P)
@@ -688,10 +820,29 @@ def _batch_block(thT, U, ny, ylag, Y, start, ref, margin):  # pragma: no cover -
     xacc = np.empty(P)
     cacc = np.empty((2, P))
     poles = bounded and margin.shape[0] > 0 and margin.min() < 0.0
+    cut = np.zeros(P, dtype=np.bool_)
     for k in range(start, n):
         _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, cacc, bounded)
         if bounded:
-            _bound_members(ref, bnd, xacc, cacc, acc, margin, poles)
+            _bound_members(ref, bnd, xacc, cacc, acc, margin, poles, cut)
+        for p in range(P):
+            Y[k, p] = acc[p]
+    return cut
+
+
+@nb.njit(cache=True, nogil=True)
+def _batch_block_lattice(thT, U, ny, ylag, Y, start, ref):  # pragma: no cover - compiled
+    # _batch_block's bounded run judged by the lattice margin (see _rerun): a row of cacc per lag
+    n, P = Y.shape
+    acc = np.empty(P)
+    _, ref, bnd = _bound_start(ref)
+    xacc = np.empty(P)
+    L = _single_lags(ny, ylag)
+    cacc = np.empty((L, P))
+    a, w = np.empty(L), np.empty(L)
+    for k in range(start, n):
+        _advance(thT, U, ny, ylag, Y, k, -1, acc, xacc, cacc, True)
+        _bound_lattice(ref, bnd, xacc, cacc, acc, a, w)
         for p in range(P):
             Y[k, p] = acc[p]
 
@@ -700,9 +851,11 @@ def _batch_block(thT, U, ny, ylag, Y, start, ref, margin):  # pragma: no cover -
 def _batch_block_parallel(blocks, U, ny, ylag, Y, start, refs, margins):  # pragma: no cover - compiled
     # blocks: (n_blocks, T, step); Y: (n_blocks, N, step) with the initial rows filled; refs
     # (n_blocks, step) or (n_blocks, 0). An OpenMP team (see _batch_sse_parallel) rather than a
-    # Python thread pool.
+    # Python thread pool. Returns cut (n_blocks, step), as _batch_block's.
+    cut = np.zeros((blocks.shape[0], blocks.shape[2]), dtype=np.bool_)
     for b in nb.prange(blocks.shape[0]):
-        _batch_block(blocks[b], U, ny, ylag, Y[b], start, refs[b], margins[b])
+        cut[b] = _batch_block(blocks[b], U, ny, ylag, Y[b], start, refs[b], margins[b])
+    return cut
 
 
 def _blocks(thT: np.ndarray, threads: int) -> np.ndarray:
@@ -752,25 +905,46 @@ def simulate_batch(
         Outputs (a transposed view of an (N, P) buffer); a diverging member has non-finite
         samples (never raises).
     """
-    P = thetas.shape[0]
     n = u.shape[0]
     thT = kernel_array(thetas.T)
     U = _input_products(code.fptr, code.fsig, code.flag, code.fpow, kernel_inputs(code, u), start)
     ref = _member_scales(code, thetas, u, y0, start, bounded)
     margin = linear_margins(code, thetas) if bounded else np.zeros(0)
+    out, cut = _simulate_members(code, thT, U, y0, start, threads, ref, np.where(margin < -1.5, 1.0, margin))
+    redo = _redo(margin, cut)
+    if redo.size:  # the members the steady gain stopped, by the lattice margin from the start (see _rerun)
+        Y = np.empty((n, redo.size))  # a few members: in this thread
+        Y[:start, :] = y0[:start, None]
+        with np.errstate(all="ignore"):
+            _batch_block_lattice(kernel_array(thT[:, redo]), U, code.ny, code.ylag, Y, start, ref[redo])
+        out[redo] = Y.T
+    return out
+
+
+def _redo(margin: np.ndarray, cut: np.ndarray) -> np.ndarray:
+    """The members to run again with the lattice margin (:func:`_rerun`, for each member): their indices."""
+    if margin.size == 0:
+        return np.zeros(0, dtype=np.int64)
+    return np.flatnonzero((margin < -1.5) & cut)
+
+
+def _simulate_members(code: Code, thT: np.ndarray, U: np.ndarray, y0: np.ndarray, start: int, threads: int,
+                      ref: np.ndarray, margin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`simulate_batch`'s runs of the members ``thT`` (T, P) judged by ``margin``: (outputs (P, N), cut (P,))."""
+    n, P = U.shape[0], thT.shape[1]
     with np.errstate(all="ignore"):
         if threads <= 1 or P < 2 * threads:
             Y = np.empty((n, P))
             Y[:start, :] = y0[:start, None]
-            _batch_block(thT, U, code.ny, code.ylag, Y, start, ref, margin)
+            cut = _batch_block(thT, U, code.ny, code.ylag, Y, start, ref, margin)
             # a transposed view, not a copy: copying 5 MB cost more than the whole batch run
-            return Y.T
+            return Y.T, cut
         blocks = kernel_array(_blocks(thT, int(threads)))  # read-only, as thT is: one compiled kernel
         Y = np.empty((blocks.shape[0], n, blocks.shape[2]))
         Y[:, :start, :] = y0[None, :start, None]
-        _batch_block_parallel(blocks, U, code.ny, code.ylag, Y, start, _ref_blocks(ref, blocks),
-                              _ref_blocks(margin - 1.0, blocks) + 1.0)  # padding members: margin 1
-        return np.concatenate([Yb.T for Yb in Y])[:P]
+        cut = _batch_block_parallel(blocks, U, code.ny, code.ylag, Y, start, _ref_blocks(ref, blocks),
+                                    _ref_blocks(margin - 1.0, blocks) + 1.0)  # padding members: margin 1
+        return np.concatenate([Yb.T for Yb in Y])[:P], cut.ravel()[:P]
 
 
 def _member_scales(code: Code, thetas: np.ndarray, u: np.ndarray, y0: np.ndarray, start: int, bounded: bool
@@ -795,7 +969,7 @@ def _ref_blocks(ref: np.ndarray, blocks: np.ndarray) -> np.ndarray:
 def _batch_sse(thT, U, ny, ylag, y, start, ring, ref, margin):  # pragma: no cover - compiled
     # Same update as _batch_block, but the outputs live in a ring buffer of `ring` rows (a
     # power of two > max lag) and only the squared free-run error is kept: the population's
-    # working set stays in L1 whatever N is. ``ref`` as for _batch_block.
+    # working set stays in L1 whatever N is. ``ref`` as for _batch_block. Returns (sse, cut), cut as _batch_block's.
     n = U.shape[0]
     P = thT.shape[1]
     mask = ring - 1
@@ -809,15 +983,44 @@ def _batch_sse(thT, U, ny, ylag, y, start, ring, ref, margin):  # pragma: no cov
     xacc = np.empty(P)
     cacc = np.empty((2, P))
     poles = bounded and margin.shape[0] > 0 and margin.min() < 0.0
+    cut = np.zeros(P, dtype=np.bool_)
     for k in range(start, n):
         _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, cacc, bounded)
         if bounded:
-            _bound_members(ref, bnd, xacc, cacc, acc, margin, poles)
+            _bound_members(ref, bnd, xacc, cacc, acc, margin, poles, cut)
         kk = k & mask
         yk = y[k]
         for p in range(P):
             Y[kk, p] = acc[p]
             e_ = acc[p] - yk
+            sse[p] += e_ * e_
+    return sse, cut
+
+
+@nb.njit(cache=True, nogil=True)
+def _batch_sse_lattice(thT, U, ny, ylag, y, start, ring, ref):  # pragma: no cover - compiled
+    # _batch_sse's bounded run judged by the lattice margin (see _rerun): a row of cacc per lag
+    n = U.shape[0]
+    P = thT.shape[1]
+    mask = ring - 1
+    Y = np.empty((ring, P))
+    for k in range(start):
+        for p in range(P):
+            Y[k & mask, p] = y[k]
+    sse = np.zeros(P)
+    acc = np.empty(P)
+    _, ref, bnd = _bound_start(ref)
+    xacc = np.empty(P)
+    L = _single_lags(ny, ylag)
+    cacc = np.empty((L, P))
+    a, w = np.empty(L), np.empty(L)
+    for k in range(start, n):
+        _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, cacc, True)
+        _bound_lattice(ref, bnd, xacc, cacc, acc, a, w)
+        kk = k & mask
+        for p in range(P):
+            Y[kk, p] = acc[p]
+            e_ = acc[p] - y[k]
             sse[p] += e_ * e_
     return sse
 
@@ -829,9 +1032,10 @@ def _batch_sse_parallel(blocks, U, ny, ylag, y, start, ring, refs, margins):  # 
     # idle core each time (a Python thread pool did not beat one thread for them: BENCHMARKS.md).
     nb_ = blocks.shape[0]
     out = np.empty((nb_, blocks.shape[2]))
+    cut = np.zeros((nb_, blocks.shape[2]), dtype=np.bool_)
     for b in nb.prange(nb_):
-        out[b] = _batch_sse(blocks[b], U, ny, ylag, y, start, ring, refs[b], margins[b])
-    return out
+        out[b], cut[b] = _batch_sse(blocks[b], U, ny, ylag, y, start, ring, refs[b], margins[b])
+    return out, cut
 
 
 def batch_sse(
@@ -877,15 +1081,23 @@ def batch_sse(
         U = _input_products(code.fptr, code.fsig, code.flag, code.fpow, kernel_inputs(code, u), start)
     ref = _member_scales(code, np.atleast_2d(np.asarray(thetas, dtype=np.float64)), u, y, start, bounded)
     margin = linear_margins(code, thetas) if bounded else np.zeros(0)
+    y = kernel_array(y)
     ring = 1 << int(np.ceil(np.log2(start + 1)))
     with np.errstate(all="ignore"):
         P = thT.shape[1]
+        fast = np.where(margin < -1.5, 1.0, margin)
         if threads <= 1 or P < 2 * threads:
-            return _batch_sse(thT, U, code.ny, code.ylag, kernel_array(y), start, ring, ref, margin)
-        blocks = kernel_array(_blocks(thT, int(threads)))  # read-only, as thT is: one compiled kernel
-        return _batch_sse_parallel(blocks, U, code.ny, code.ylag, kernel_array(y), start, ring,
-                                   _ref_blocks(ref, blocks),
-                                   _ref_blocks(margin - 1.0, blocks) + 1.0).ravel()[:P]  # padding: margin 1
+            sse, cut = _batch_sse(thT, U, code.ny, code.ylag, y, start, ring, ref, fast)
+        else:
+            blocks = kernel_array(_blocks(thT, int(threads)))  # read-only, as thT is: one compiled kernel
+            sse, cut = _batch_sse_parallel(blocks, U, code.ny, code.ylag, y, start, ring, _ref_blocks(ref, blocks),
+                                           _ref_blocks(fast - 1.0, blocks) + 1.0)  # padding: margin 1
+            sse, cut = sse.ravel()[:P], cut.ravel()[:P]
+        redo = _redo(margin, cut)
+        if redo.size:  # the members the steady gain stopped, by the lattice margin from the start (see _rerun)
+            sse[redo] = _batch_sse_lattice(kernel_array(thT[:, redo]), U, code.ny, code.ylag, y, start, ring,
+                                           ref[redo])
+    return sse
 
 
 @nb.njit(cache=True, nogil=True)
