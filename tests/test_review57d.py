@@ -91,6 +91,19 @@ def test_a_population_mixing_resonant_growing_and_quiet_members_stops_each_where
             np.testing.assert_allclose(r, m.simulate(rec), rtol=1e-9, atol=1e-9 * np.abs(r).max())
 
 
+def test_linear_margins_marks_a_feedback_through_an_input_beyond_lag_2_for_the_lattice_pass_row_by_row():
+    # −2 (judged by the steady gain first, by the lattice margin where that stops the run) for a finite θ, 1 for a
+    # non-finite one: one run's path (floats) and several rows' (arrays) alike
+    from graybox.core._simulation_kernels import encode, linear_margins
+
+    code = encode(gb.parse_structure(["y(k-1)", "y(k-3)v(k-1)", "u(k-1)"]), ("u", "v"))
+    rows = np.array([[0.5, 0.1, 1.0], [np.nan, 0.1, 1.0], [0.5, np.inf, 1.0], [0.0, 0.0, 0.0]])
+    assert linear_margins(code, rows).tolist() == [-2.0, 1.0, 1.0, -2.0]
+    assert [linear_margins(code, r)[0] for r in rows] == [-2.0, 1.0, 1.0, -2.0]
+    lag2 = encode(gb.parse_structure(["y(k-1)", "y(k-2)v(k-1)", "u(k-1)"]), ("u", "v"))
+    assert [linear_margins(lag2, r)[0] for r in rows] == [-1.0, 1.0, 1.0, -1.0]
+
+
 @settings(max_examples=150, deadline=None)
 @given(st.lists(st.tuples(st.floats(0.0, 1.05), st.floats(0.0, np.pi), st.booleans()), min_size=1, max_size=4))
 def test_property_the_lattice_margin_bounds_the_peak_to_peak_gain_of_any_order(parts):
