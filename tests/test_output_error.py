@@ -393,3 +393,27 @@ def test_a_least_squares_start_below_the_float_range_is_refused_in_words():
         output_error(st, rec, n_starts=1, margin=None)
     with pytest.raises(ValueError, match=far):
         gb.cls(st, rec)
+
+
+@pytest.mark.parametrize("ey", [-520, -565, 520])
+def test_an_output_near_the_float_ranges_ends_is_fitted_as_in_ordinary_units(ey):
+    # y × 2^ey (about 1e-157, 1e-170, 1e157): J_S's squares left the float range. At 2^-520 every start failed
+    # ("array must not contain infs or NaNs", LAPACK's DLASCL on stderr), at 2^-565 J_S was 0 and the fits stopped
+    # at their starts (θ 0.02 off), at 2^520 every start "diverged". Fitted on the signals times a power of two (as
+    # frols, semp and els are), θ is the same model and J_S the same in the data's units (0 or inf beyond the range)
+    st = gb.Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)y(k-1)", "1"])
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(-1.0, 1.0, 51), 4)[:200]
+    y = gb.simulate(st, np.array([1.2, -0.45, 0.5, -0.1, 0.05]), u, np.zeros(2)) + 0.05 * rng.standard_normal(200)
+    half = (gb.Record(u[:120], y[:120], name="fit"), gb.Record(u[120:], y[120:], name="choose"))
+    kw = dict(n_starts=1, max_nfev=20, progress=False)
+    ref = output_error(st, half[0], choose_on=half[1], **kw)
+    far = [gb.Record(r.u, np.ldexp(r.y, ey), name=r.name) for r in half]
+    res = output_error(st, far[0], choose_on=far[1], **kw)
+    # y(k-1), y(k-2), u(k-1)y(k-1) keep their θ; u(k-1) and the constant carry y's unit
+    np.testing.assert_allclose(res.model.theta, np.ldexp(ref.model.theta, [0, 0, ey, 0, ey]), rtol=1e-9)
+    with np.errstate(over="ignore", under="ignore"):
+        for got, want in ((res.JS, ref.JS), (res.JS_choose, ref.JS_choose)):
+            assert got == pytest.approx(np.ldexp(want, 2 * ey), rel=1e-6, abs=1e-320)
+    assert res.start == ref.start and res.radius == pytest.approx(ref.radius, rel=1e-9)
+    assert list(res.starts["status"]) == list(ref.starts["status"])

@@ -19,13 +19,13 @@ from ._gram import as_gram_records, is_dask_data
 from ._terms import Structure, Term
 
 if TYPE_CHECKING:
-    from ._records import StaticPoints
+    from ._records import Record, StaticPoints
 
 __all__ = ["column_scales", "scaled_lstsq", "thread_pools", "one_blas_thread", "check_rows", "free_directions",
            "check_identified", "rank_tolerance", "HELD_OUTPUT", "CONSTANT_RTOL", "output_spread", "output_scale",
            "spread_scale", "beyond_float_range", "refuse_beyond_float_range", "refuse_parameter_scales",
-           "binary_scaled", "scaled_theta", "scaled_points", "unscaled_theta", "unscaled_rss", "unscaled_levels",
-           "scaled_norm", "scaled_norms", "mean_square", "binary_exponent"]
+           "binary_scaled", "scaled_records", "scaled_theta", "scaled_points", "unscaled_theta", "unscaled_rss",
+           "unscaled_levels", "scaled_norm", "scaled_norms", "mean_square", "binary_exponent"]
 
 _CONTROLLER: list[ThreadpoolController] = []
 
@@ -374,10 +374,20 @@ def binary_scaled(data: object, process: Structure) -> tuple[object, dict[str, i
     reach = max([abs(exps["y"])] + [sum(p * abs(exps.get(s, 0)) for s, _, p in t.factors) for t in process])
     if 2 * reach <= _SAFE_EXPONENT:
         return data, {}
-    d = np.array([exps[n] for n in names])
-    scaled = [replace(r, u=np.ldexp(r.u, -d[0] if r.u.ndim == 1 else -d), y=np.ldexp(r.y, -exps["y"]))
-              for r in records]
-    return scaled, exps
+    return scaled_records(records, exps), exps
+
+
+def scaled_records(records: Sequence[Record], exps: Mapping[str, int]) -> list[Record]:
+    """The records with y and each input times 2^-e, the exponents :func:`binary_scaled` chose (e.g. for choosing
+    records, which take the fitting records' powers; an input the exponents do not name is kept, and refused in its
+    own words where it is read)."""
+    if not exps:
+        return list(records)
+    out = []
+    for r in records:
+        d = np.array([exps.get(n, 0) for n in r.input_names], dtype=int)
+        out.append(replace(r, u=np.ldexp(r.u, -d[0] if r.u.ndim == 1 else -d), y=np.ldexp(r.y, -exps["y"])))
+    return out
 
 
 def unscaled_theta(theta: np.ndarray, terms: Sequence[Term], exps: Mapping[str, int]) -> np.ndarray:

@@ -37,16 +37,18 @@ follow the record's slow drift (what the SE front does on the bundled plant; BEN
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Literal, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
 
-from ..core._least_squares import one_blas_thread
+from ..core._least_squares import (binary_scaled, one_blas_thread, refuse_beyond_float_range, scaled_records,
+                                   scaled_theta, unscaled_theta)
 from ..core._progress import progress_bar
 from ..core._records import (Dataset, Record, as_records, carried_from, check_alike, check_overlap, choosing_records,
                              same_record)
+from ..core._regressors import stacked_regressors
 from ..core._terms import Structure
 from ..core._validation import (Relocked, FrozenFrame, FrozenMap, check_bool, check_choice, check_fields, check_int,
                                 check_margin_value, check_mean_square, check_real, check_seed, check_str, check_theta)
@@ -72,7 +74,8 @@ class OEResult(Relocked):
     model : Model
         The estimate (engineering units).
     JS : float
-        Its free-run MSE on the fitting record(s) (output units²).
+        Its free-run MSE on the fitting record(s) (output units²; 0 or inf where that leaves the float range, an
+        output near 1e-160 or 1e160: the fit itself runs on the signals times a power of two).
     JS_choose : float
         Its free-run MSE on the choosing record(s); NaN when none was given.
     chosen_on : str
@@ -211,7 +214,7 @@ def output_error(
         terms and the constant are then collinear; the message names them: give a record whose input
         moves, or static points to :func:`~graybox.se_pareto` / :func:`~graybox.se_dsf`).
     """
-    rec = as_records(data)
+    given = as_records(data)
     n_starts = check_int(n_starts, "n_starts", low=0)
     subsample = check_real(subsample, "subsample", low=0.0, high=1.0, low_open=True)
     seed = check_seed(seed)
@@ -224,24 +227,60 @@ def output_error(
     st = as_structure(structure)
     if theta0 is not None:  # before the fits, not after the least-squares and ELS starts
         theta0 = check_theta(len(st), theta0, "theta0")
-    problem = SEProblem(st, rec, None, margin=None if margin == "auto" else margin, ridge=ridge)
-    problem.check_identified()  # the records alone must identify θ: an input held constant does not
-    chooser, chosen_on = None, ""
+    crec: list[Record] = []
     if choose_on is not None:  # checked once here, not again by a refit inside the margin
         crec = choosing_records(choose_on)
         for c in crec:
-            check_alike(rec, c)
-        if any(same_record(c, r) for c in crec for r in rec):
+            check_alike(given, c)
+        if any(same_record(c, r) for c in crec for r in given):
             raise ValueError("choose_on: a choosing record is a fitting record; choose on data the fit did not see "
                              "(e.g. data.valid)")
         for c in crec:
-            for r in rec:
+            for r in given:
                 check_overlap(c, r, "choosing", "fitting", "choose on data the fit did not see (e.g. data.valid)",
                               prefix="choose_on: ")
+    # fitted on y and each input times a power of two where J_S's squares (or a term's products) would leave the
+    # float range, as frols, semp and els are: at y near 1e-157 every start failed on NaNs, near 1e-170 J_S was 0 and
+    # the fits stopped at their starts, near 1e157 every start "diverged". The choosing records take the same powers
+    rec, exps = binary_scaled(given, st)
+    rec, crec = list(rec), scaled_records(crec, exps)
+    if exps:  # but a term whose column is no float in the data's own units is refused by name, as els refuses it
+        stacked_regressors(st, given)
+    if exps and theta0 is not None:
+        theta0 = scaled_theta(theta0, st, exps)
+    problem = SEProblem(st, rec, None, margin=None if margin == "auto" else margin, ridge=ridge)
+    problem.check_identified()  # the records alone must identify θ: an input held constant does not
+    if exps:  # a least-squares θ that is no float in the data's own units is refused as on them, before any fit
+        refuse_beyond_float_range(st.terms, unscaled_theta(problem.ls_theta(), list(st), exps),
+                                  prefix="least squares: ")
+    chooser, chosen_on = None, ""
+    if crec:
         chooser, chosen_on = SEProblem(st, crec, None, scored_only=True), ", ".join(r.name for r in crec)
     fit = dict(n_starts=n_starts, subsample=subsample, theta0=theta0, chooser=chooser, chosen_on=chosen_on, seed=seed,
                max_nfev=max_nfev, tol=tol, solver=solver, progress=progress, name=name)
-    return refit_if_slow(problem, lambda p: _oe_fit(p, rec, **fit), "the output-error fit", margin == "auto")
+    res = refit_if_slow(problem, lambda p: _oe_fit(p, rec, **fit), "the output-error fit", margin == "auto")
+    return _unscaled(res, exps, given)
+
+
+def _unscaled(res: OEResult, exps: dict[str, int], given: list[Record]) -> OEResult:
+    """A fit on the signals times 2^-e (:func:`~graybox.core._least_squares.binary_scaled`) in the data's own units:
+    θ (refused where it is no float there), and the free-run MSEs (output units²: 0 or inf where they leave the float
+    range, as y² there)."""
+    if not exps:
+        return res
+    st = res.model.structure
+    theta = unscaled_theta(res.model.theta, list(st), exps)
+    refuse_beyond_float_range(st.terms, theta, prefix="output_error: the estimate cannot be used on these data: ")
+
+    def own(ms):
+        with np.errstate(over="ignore", under="ignore"):
+            return np.ldexp(np.asarray(ms, dtype=float), 2 * exps["y"])
+
+    starts = res.starts.copy()
+    for c in ("JS_start", "JS", "JS_choose"):
+        starts[c] = own(starts[c].to_numpy(float))
+    return replace(res, model=Model(st, theta, name=res.model.name, **carried_from(given)), JS=float(own(res.JS)),
+                   JS_choose=float(own(res.JS_choose)), starts=starts)
 
 
 def _oe_fit(problem: SEProblem, rec: list[Record], *, n_starts, subsample, theta0, chooser, chosen_on, seed, max_nfev,
