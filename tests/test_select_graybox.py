@@ -788,3 +788,17 @@ def test_sources_are_named_once_as_estimators_are(data):
         gb.select_graybox(cand, data, estimator="ls", sources=())
     with pytest.raises(ValueError, match="data: no records given"):
         gb.decimation_advice([])
+
+
+@pytest.mark.parametrize("ey, degree", [(-565, 2), (-540, 1), (532, 1)])
+def test_an_output_whose_mean_squares_leave_the_float_range_is_refused_before_any_search(data, ey, degree):
+    # y × 2^-565 (about 1e-170): every row's J_S and J_S_test were 0, vs_best inf, and a row was chosen among ties
+    # of nothing; × 2^532 (1e160, degree 1: no y² candidate refuses it first): "every member's free run diverged".
+    # The scores compared are mean squares of output errors: where y² is no normal float they are not numbers
+    recs = [gb.Record(r.u, np.ldexp(r.y, ey), name=r.name) for r in (data.ident, data.valid)]
+    with pytest.raises(ValueError, match=r"identification record.*output .*float range.*rescale"):
+        gb.select_graybox(gb.Candidates(2, 2, degree=degree), recs[0], validation=recs[1], estimator="ls")
+    # a test record alone out of range is named as the test record
+    with pytest.raises(ValueError, match=r"test record.*float range"):
+        gb.select_graybox(gb.Candidates(2, 2, degree=degree), data.ident, validation=data.valid, test=recs[1],
+                          estimator="ls")

@@ -637,6 +637,7 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
         if len(rec) <= L + 1:  # each is fitted, chosen or scored on alone (a Record's own check says "record")
             raise ValueError(f"the {name} record{f' {rec.name!r}' if name[0].isdigit() else ''} ({len(rec)} samples) "
                              f"is shorter than the candidates' lags + 2 ({L + 2})")
+        _check_output_scale(rec, name)
     for a, (name_a, rec_a) in enumerate(named):
         for name_b, rec_b in named[a + 1:]:
             advice = _OVERLAP_ADVICE[name_b.split()[-1], name_a.split()[-1]]
@@ -658,6 +659,24 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
                           f"the {type(given).__name__}'s domain", **({} if band is not None else
                                                                       {"consequence": unused}))
     return _Plan(idents, splits, tests, sp, np.inf if band is None else band, L, extra), form
+
+
+def _check_output_scale(rec: gb.Record, name: str) -> None:
+    """``ValueError`` where the free-run mean squares the choice compares (output units²) are no numbers on ``rec``: its
+    output's mean square below the normal floats (y near 1e-160: every row's J_S was 0 and a row was chosen among ties
+    of nothing), or the sum of squares of errors up to twice the output over the record beyond the largest (y near
+    1e154: every run read as diverging)."""
+    with np.errstate(over="ignore", under="ignore"):
+        ms = float(np.mean(np.square(rec.y)))
+        top = ms * 4.0 * len(rec.y)
+    info = np.finfo(float)
+    if ms == 0.0 and not np.any(rec.y):  # an output at rest: said where it is read (a constant output)
+        return
+    if ms < info.tiny or not top <= info.max:
+        what = "small" if ms < info.tiny else "large"
+        raise ValueError(f"the {name} record{f' {rec.name!r}' if name[0].isdigit() else ''}'s output is too {what} "
+                         f"for the free-run mean squares the choice compares (output units²; its mean square, "
+                         f"{ms:.3g}, lies too near an end of the float range): rescale y (other units) and select again")
 
 
 def _named(records: tuple[gb.Record, ...] | None, role: str) -> list[tuple[str, gb.Record]]:
@@ -1423,7 +1442,8 @@ def select_graybox(
     ------
     ValueError
         Candidates without a term of a cluster the static form needs; records shorter than the
-        lags; a test or validation record that is (or overlaps) a fitting record, or identification
+        lags, or whose output's mean square lies too near an end of the float range (y near 1e-160
+        or 1e154: rescale it); a test or validation record that is (or overlaps) a fitting record, or identification
         records that overlap each other; a band without static points;
         sizes beyond the candidates; no structure meeting the band (without ``fallback``); bad
         arguments.
