@@ -969,6 +969,17 @@ def _ref_blocks(ref: np.ndarray, blocks: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(_blocks(ref[None, :], blocks.shape[0])[:, 0, :])
 
 
+@nb.njit(cache=True, nogil=True, inline="always")
+def _ring_start(y, start, ring, P):  # pragma: no cover - compiled
+    # the ring buffer of the batch SSE kernels: each member's first `start` outputs are the measured ones
+    mask = ring - 1
+    Y = np.empty((ring, P))
+    for k in range(start):
+        for p in range(P):
+            Y[k & mask, p] = y[k]
+    return Y
+
+
 @nb.njit(cache=True, nogil=True)
 def _batch_sse(thT, U, ny, ylag, y, start, ring, ref, margin):  # pragma: no cover - compiled
     # Same update as _batch_block, but the outputs live in a ring buffer of `ring` rows (a
@@ -977,10 +988,7 @@ def _batch_sse(thT, U, ny, ylag, y, start, ring, ref, margin):  # pragma: no cov
     n = U.shape[0]
     P = thT.shape[1]
     mask = ring - 1
-    Y = np.empty((ring, P))
-    for k in range(start):
-        for p in range(P):
-            Y[k & mask, p] = y[k]
+    Y = _ring_start(y, start, ring, P)
     sse = np.zeros(P)
     acc = np.empty(P)
     bounded, ref, bnd = _bound_start(ref)
@@ -1007,10 +1015,7 @@ def _batch_sse_lattice(thT, U, ny, ylag, y, start, ring, ref):  # pragma: no cov
     n = U.shape[0]
     P = thT.shape[1]
     mask = ring - 1
-    Y = np.empty((ring, P))
-    for k in range(start):
-        for p in range(P):
-            Y[k & mask, p] = y[k]
+    Y = _ring_start(y, start, ring, P)
     sse = np.zeros(P)
     acc = np.empty(P)
     _, ref, bnd = _bound_start(ref)
