@@ -1,8 +1,9 @@
-"""ELS and SEMP on signals near the ends of the float range: the same fit as in ordinary units.
+"""ELS, SEMP, se_pareto and se_dsf on signals near the ends of the float range: the same fit as in ordinary units.
 
 At y near 1e155, y² overflowed (ELS's round-off threshold became inf); near 1e-200 the residuals' squares underflowed to
 0; either way ELS returned least squares as if the fit were exact, its MA part skipped, and SEMP's criterion took
 ln 0. Both now run, as frols does, on y and each input times a power of two (exact), and map θ back.
+se_pareto (J_S 0 near y × 1e-170: every member stopped at its start) and se_dsf run so too.
 """
 import warnings
 
@@ -419,3 +420,44 @@ def test_pe_uncertainty_at_y_times_2_to_the_512_is_the_ordinary_units_one_scaled
         warnings.simplefilter("error")
         far = sds(512)
     np.testing.assert_allclose(far, _powers_of_two(base, terms, 512, 0), rtol=1e-6)
+
+
+SE_TERMS = ["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)y(k-1)", "1"]
+SE_THETA = np.array([1.2, -0.45, 0.5, -0.1, 0.05])
+
+
+def _se_data(ey: int, eu: int):
+    """A record and static points of the SE tests' plant with y times 2^ey and u times 2^eu, and the powers of two
+    that take each term's θ from ordinary units to those (y(k) = Σ θ_t Π factors)."""
+    st = gb.Structure(SE_TERMS)
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(-1.0, 1.0, 31), 4)[:120]
+    y = gb.simulate(st, SE_THETA, u, np.zeros(2)) + 0.05 * rng.standard_normal(120)
+    ub = np.linspace(-1.0, 1.0, 5)
+    yb = (SE_THETA[2] * ub + SE_THETA[4]) / (1 - SE_THETA[0] - SE_THETA[1] - SE_THETA[3] * ub)
+    shift = np.array([0, 0, ey - eu, -eu, ey])
+    return st, gb.Record(np.ldexp(u, eu), np.ldexp(y, ey)), gb.StaticPoints(np.ldexp(ub, eu), np.ldexp(yb, ey)), shift
+
+
+@pytest.mark.parametrize("method", ["gradient", "ga"])
+@pytest.mark.parametrize("ey, eu", [(-565, 0), (520, 0), (-520, 300)])
+def test_se_pareto_near_the_float_ranges_ends_fits_as_in_ordinary_units(method, ey, eu):
+    # y × 2^-565 (about 1e-170): J_S underflowed to 0 and every member stopped at its start (θ 0.03 off the fit in
+    # ordinary units, the λ1 = 0.5 and 1 members one model, every J 0); y × 2^520 (1e157): every start's free run
+    # read as diverging and the sweep failed. Fitted on the signals times powers of two (exact), as output_error is,
+    # each member is the same model, its J's and cost the same in the data's units (0 or inf beyond the range)
+    kw = dict(lambdas=[0.5, 1.0], method=method, progress=False)
+    kw.update(max_nfev=10, margin=None) if method == "gradient" else kw.update(options=gb.GAOptions(20, 5))
+    st, rec, sp, _ = _se_data(0, 0)
+    ref = gb.se_pareto(st, rec, sp, **kw)
+    st, rec, sp, shift = _se_data(ey, eu)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.StaticRangeWarning)
+        got = gb.se_pareto(st, rec, sp, **kw)
+    np.testing.assert_allclose(got.thetas, np.ldexp(ref.thetas, shift), rtol=1e-9)
+    with np.errstate(over="ignore", under="ignore"):
+        for nm in ("J1", "JS", "JSF"):
+            np.testing.assert_allclose(getattr(got, nm), np.ldexp(getattr(ref, nm), 2 * ey), rtol=1e-6, atol=1e-320)
+        np.testing.assert_allclose(got.extra["cost"], np.ldexp(ref.extra["cost"], 2 * ey), rtol=1e-6, atol=1e-320)
+    np.testing.assert_allclose(got.extra["radius"], ref.extra["radius"], rtol=1e-9)
+

@@ -65,8 +65,9 @@ from ..core._simulation_kernels import (
     record_inputs,
     simulate_one,
 )
-from ..core._least_squares import (check_rows, column_scales, one_blas_thread, output_scale, refuse_beyond_float_range,
-                                     refuse_parameter_scales, scaled_lstsq)
+from ..core._least_squares import (binary_scaled, check_rows, column_scales, one_blas_thread, output_scale,
+                                   refuse_beyond_float_range, refuse_parameter_scales, scaled_lstsq, scaled_points,
+                                   scaled_theta, unscaled_theta)
 from ..models._coerce import as_structure, records_of, static_points
 from ._pareto import ParetoSet
 from ..core._progress import progress_bar
@@ -1873,7 +1874,8 @@ def se_pareto(
     -------
     ParetoSet
         All members, one per λ in the order of ``lambdas``, with J_1, J_S and J_SF from the shared
-        evaluator; the optimised cost is in ``extra["cost"]``, each member's largest local spectral radius along the
+        evaluator (output units²: 0 or inf where they leave the float range, an output near 1e-160 or 1e160,
+        whose sweep runs on the signals times a power of two); the optimised cost is in ``extra["cost"]``, each member's largest local spectral radius along the
         identification records in ``extra["radius"]`` (dimensionless) and the margin it was fitted
         with in ``extra["margin"]`` (NaN: none). A λ whose fit failed (no feasible start, or no individual
         with a finite cost) stays in the set as a failed member, with the reason in
@@ -1910,12 +1912,23 @@ def se_pareto(
     sp = static_points(static, data, ubar=ubar, needed_by="the SE problem")
     margin = check_margin(margin)
     st = as_structure(structure)
-    problem = SEProblem(st, rec, sp, margin=None if margin == "auto" else margin, ridge=ridge)
+    if isinstance(theta0, str) and theta0 != "ls":
+        raise ValueError(f"theta0 must be an array, 'ls' or None, got {theta0!r}")
+    # fitted on y and each input times a power of two where J_S's squares (or a term's products) would leave the
+    # float range, as output_error is: at y near 1e-170 J_S underflowed to 0 and every member stopped at its start,
+    # near 1e157 every start's free run read as diverging. θ and the J's are mapped back to the data's units
+    fit_rec, exps = binary_scaled(rec, st)
+    fit_rec, fit_sp = list(fit_rec), sp if not exps else scaled_points(sp, exps)
+    if exps:
+        stacked_regressors(st, rec)  # a term whose column is no float in the data's own units is refused by name
+        if theta0 is not None and not isinstance(theta0, str):
+            theta0 = scaled_theta(check_theta(len(st), theta0, "theta0"), st, exps)
+        if starts is not None and not isinstance(starts, str):
+            starts = [scaled_theta(check_theta(len(st), s_, f"starts[{k}]"), st, exps) for k, s_ in enumerate(starts)]
+    problem = SEProblem(st, fit_rec, fit_sp, margin=None if margin == "auto" else margin, ridge=ridge)
     problem.check_identified()  # the records with the static points (an input held constant needs them)
     warn_static_range(sp.ubar, rec)  # after: bad input is an error, not a warning and an error
     lam_in = SE_LAMBDAS if lambdas is None else lambdas
-    if isinstance(theta0, str) and theta0 != "ls":
-        raise ValueError(f"theta0 must be an array, 'ls' or None, got {theta0!r}")
 
     def sweep(problem: SEProblem, checkpoint, lams=lam_in, progress=progress, fitted=None) -> SEFront:
         if method == "ga":
@@ -1961,6 +1974,13 @@ def se_pareto(
         raise ValueError(f"every member of the SE sweep ({method}) failed, so there is no Pareto set: {reasons}. "
                          "Try another structure, theta0, starts or more generations")
     radii = problem.warn_slow(thetas, f"SE sweep ({method}) members", auto=margin == "auto")
+    if exps:  # in the data's own units: a member's θ that is no float there is refused by name
+        fitted = np.array([i not in failures for i in range(K)], dtype=bool)
+        thetas[fitted] = unscaled_theta(thetas[fitted], list(problem.structure), exps)
+        refuse_beyond_float_range(problem.structure.terms, *thetas[fitted],
+                                  prefix="se_pareto: a member cannot be used on these data: ")
+        with np.errstate(over="ignore", under="ignore"):  # output units²: inf or 0 beyond the range, as y² there
+            costs = np.ldexp(costs, 2 * exps["y"])
     # the sweep runs from λ1 = 1 down (an internal matter); the set keeps the caller's order of lambdas, as
     # pe_pareto's does: sweep position p holds the caller's member order[p]
     order = np.argsort(-check_lambdas(lam_in), kind="stable")
