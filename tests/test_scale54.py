@@ -461,3 +461,24 @@ def test_se_pareto_near_the_float_ranges_ends_fits_as_in_ordinary_units(method, 
         np.testing.assert_allclose(got.extra["cost"], np.ldexp(ref.extra["cost"], 2 * ey), rtol=1e-6, atol=1e-320)
     np.testing.assert_allclose(got.extra["radius"], ref.extra["radius"], rtol=1e-9)
 
+
+@pytest.mark.parametrize("ey, eu", [(-565, 0), (520, 0), (-520, 300)])
+def test_se_dsf_near_the_float_ranges_ends_solves_as_in_ordinary_units(ey, eu):
+    # the band from the points' uncertainty δ (0.01 in ordinary units): at y × 2^-565 the band δ² and every J_S
+    # underflowed to 0, at y × 2^520 they overflowed. Solved on the signals times powers of two (exact), the model is
+    # the same, its J's, the band and the start's J's the same in the data's units (0 or inf beyond the range)
+    kw = dict(lambdas=[0.5], pe_lambdas=np.logspace(-4, 0, 6))
+    st, rec, sp, _ = _se_data(0, 0)
+    ref = gb.se_dsf(st, rec, gb.StaticPoints(sp.ubar, sp.ybar, uncertainty=0.01), **kw)
+    st, rec, sp, shift = _se_data(ey, eu)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.StaticRangeWarning)
+        far = gb.StaticPoints(sp.ubar, sp.ybar, uncertainty=np.ldexp(0.01, ey))
+        got = gb.se_dsf(st, rec, far, **kw)
+    np.testing.assert_allclose(got.model.theta, np.ldexp(ref.model.theta, shift), rtol=1e-9)
+    assert (got.in_band, got.start, got.n_iter) == (ref.in_band, ref.start, ref.n_iter)
+    with np.errstate(over="ignore", under="ignore"):
+        for nm in ("JS", "JSF", "band", "start_JS", "start_JSF"):
+            assert getattr(got, nm) == pytest.approx(np.ldexp(getattr(ref, nm), 2 * ey), rel=1e-6, abs=1e-320), nm
+        want = np.ldexp(1e-4, 2 * ey)
+    assert far.band == pytest.approx(want, rel=1e-9, abs=1e-320)  # δ²'s mean: 0 or inf there, without a warning

@@ -412,12 +412,15 @@ def scaled_theta(theta: np.ndarray, structure: Structure, exps: Mapping[str, int
 
 
 def scaled_points(points: StaticPoints, exps: Mapping[str, int]) -> StaticPoints:
-    """Static points on the signals times 2^-e (as :func:`scaled_theta`'s): ȳ by y's exponent, ū by its input's."""
+    """Static points on the signals times 2^-e (as :func:`scaled_theta`'s): ȳ and its uncertainty δ by y's exponent,
+    ū by its input's."""
     ub = np.asarray(points.ubar, float)
     names = [n for n in exps if n not in ("y", "e")]
     # an input the exponents do not name is left as it is: the caller refuses points of other inputs, in its words
     d = exps[names[0]] if ub.ndim == 1 else np.array([exps.get(n, 0) for n in points.input_names])
-    return replace(points, ubar=np.ldexp(ub, -d), ybar=np.ldexp(np.asarray(points.ybar, float), -exps["y"]))
+    delta = points.uncertainty
+    return replace(points, ubar=np.ldexp(ub, -d), ybar=np.ldexp(np.asarray(points.ybar, float), -exps["y"]),
+                   uncertainty=None if delta is None else np.ldexp(np.asarray(delta, float), -exps["y"]))
 
 
 def unscaled_levels(levels: Mapping[str, float], exps: Mapping[str, int]) -> dict[str, float]:

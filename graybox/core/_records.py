@@ -343,13 +343,15 @@ class StaticPoints(Relocked):
         J_SF is the mean of (ȳ_i − ŷ_i)², so a static curve through the true steady states has
         J_SF ≤ mean δ_i² when each measured ȳ_i is within δ_i of the truth: the rule reads the
         same in any units (the paper's B = 0.175² = 0.031 mlc² is this rule for its transmitter).
-        ``ValueError`` when the points carry no uncertainty: then pass the band yourself.
+        ``ValueError`` when the points carry no uncertainty: then pass the band yourself. 0 or inf where δ² leaves
+        the float range (δ near 1e-170 or 1e160), as J_SF's squares there.
         """
         if self.uncertainty is None:
             raise ValueError(f"{self.name}: these static points carry no uncertainty, so no band follows from them; "
                              "pass band=B (J_SF's bound, output units², e.g. the square of the static measurements' "
                              "error) or build the points with uncertainty=δ (output units)")
-        return float(np.mean(self.uncertainty**2))
+        with np.errstate(over="ignore", under="ignore"):  # beyond the float range: 0 or inf, said, not warned
+            return float(np.mean(self.uncertainty**2))
 
     def with_uncertainty(self, uncertainty: object) -> "StaticPoints":
         """The same points carrying ``uncertainty`` (δ, output units; one number or one per point)."""

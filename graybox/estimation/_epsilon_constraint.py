@@ -32,7 +32,7 @@ front is not convex.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Literal, Sequence
 
 import numpy as np
@@ -41,7 +41,9 @@ from ._decisions import resolve_band
 from ._local_models import check_margin
 from ..models._coerce import as_structure, records_of, static_points
 from ..models._model import Model
-from ..core._least_squares import one_blas_thread
+from ..core._least_squares import (binary_scaled, one_blas_thread, refuse_beyond_float_range, scaled_points,
+                                   scaled_theta, unscaled_theta)
+from ..core._regressors import stacked_regressors
 from ..core._reprs import beside, bound_text
 from ..core._records import Dataset, Record, StaticPoints, carried_from, warn_static_range
 from ._simulation_error import (SEProblem, _Failed, _multistart, _pe_members, _pe_starts, _pull_inside,
@@ -67,7 +69,8 @@ class DSFResult(Relocked):
         Its free-run MSE on the identification record(s) and its static MSE at the static points
         (output units²), by the shared definitions.
     band : float
-        B, the bound on J_SF (output units²).
+        B, the bound on J_SF (output units²; 0 or inf where it leaves the float range, as J_S and J_SF then do: an
+        output near 1e-160 or 1e160, solved on the signals times a power of two).
     in_band : bool
         Whether J_SF ≤ B holds (the name :class:`Decision` uses too). When False, ``model`` has the
         smallest J_S among the solutions whose J_SF is within 0.1 % of the smallest J_SF reached.
@@ -98,10 +101,14 @@ class DSFResult(Relocked):
 
     def __post_init__(self) -> None:
         check_fields(self)
-        check_real(self.band, "DSFResult: band", low=0, low_open=True)
+        # 0 or inf: a band beyond the float range in the data's units (se_dsf solved on scaled signals and judged
+        # in_band there, which J_SF and B, both 0 or both inf here, no longer tell)
+        beyond = self.band == 0.0 or self.band == np.inf
+        if not beyond:
+            check_real(self.band, "DSFResult: band", low=0, low_open=True)
         for name in ("JS", "JSF", "start_JS", "start_JSF"):
             check_mean_square(getattr(self, name), f"DSFResult: {name}")
-        if self.in_band != bool(self.JSF <= self.band * (1 + 1e-12)):  # as se_dsf judges it
+        if not beyond and self.in_band != bool(self.JSF <= self.band * (1 + 1e-12)):  # as se_dsf judges it
             raise ValueError(f"DSFResult: in_band is {self.in_band} but JSF = {self.JSF!r} against the band "
                              f"B = {self.band!r}")
         if self.n_iter < 0:
@@ -490,7 +497,8 @@ def se_dsf(
                          "(output units², the bound on J_SF)")
     if band is not None and not _is_number(band):  # a pair too: se_dsf takes one bound (check_band offers pairs)
         raise TypeError(f"se_dsf: band must be a number B > 0 (the bound on J_SF, output units²), got {band!r}")
-    band = resolve_band(band, sp, "se_dsf")[1]
+    given_band = band is not None
+    band = resolve_band(band, sp, "se_dsf")[1] if given_band else None  # from δ below, where δ² stays a float
     max_iter = check_int(max_iter, "max_iter", low=1)
     tol = check_real(tol, "tol", low=0, low_open=True)
     # checked here, not only where the sweeps run: with theta0 they do not, and bad weights would pass unseen
@@ -498,16 +506,43 @@ def se_dsf(
     pe_lambdas = None if pe_lambdas is None else check_lambdas(pe_lambdas, "pe_lambdas")
     margin = check_margin(margin)
     st = as_structure(structure)
-    problem = SEProblem(st, recs, sp, margin=None if margin == "auto" else margin)
+    # solved on y and each input times a power of two where J_S's squares (or a term's products) would leave the
+    # float range, as se_pareto and output_error are: at y near 1e-170 δ² and every J underflowed to 0, near 1e157
+    # they overflowed; the model and the J's are mapped back to the data's units
+    fit_recs, exps = binary_scaled(recs, st)
+    fit_recs, fit_sp = list(fit_recs), sp if not exps else scaled_points(sp, exps)
+    if exps:
+        stacked_regressors(st, recs)  # a term whose column is no float in the data's own units is refused by name
+        if theta0 is not None:
+            theta0 = scaled_theta(check_theta(len(st), theta0, "theta0"), st, exps)
+    fit_band = resolve_band(None, fit_sp, "se_dsf")[1] if not given_band else band if not exps else float(
+        np.ldexp(band, -2 * exps["y"]))
+    problem = SEProblem(st, fit_recs, fit_sp, margin=None if margin == "auto" else margin)
     problem.check_identified()  # the records with the static points (an input held constant needs them)
     warn_static_range(sp.ubar, recs)  # after: bad input is an error, not a warning and an error
-    solve = dict(band=band, theta0=theta0, lambdas=lambdas, max_iter=max_iter, tol=tol, pe_lambdas=pe_lambdas)
+    solve = dict(band=fit_band, theta0=theta0, lambdas=lambdas, max_iter=max_iter, tol=tol, pe_lambdas=pe_lambdas)
     result = refit_if_slow(problem, lambda p: _solve(p, **solve), "se_dsf's model", margin == "auto")
+    if exps:
+        result = _unscaled(result, exps, recs, sp)
+    band = result.band  # the points' own where none was given
     if not result.in_band:  # said of the model returned only (margin="auto" may have solved twice)
         warn(f"se_dsf: the band B = {bound_text(band, result.JSF)} is infeasible for this structure from the start {result.start}: the "
              f"smallest J_SF reached is {beside(result.JSF, band)} (J_S {result.JS:.4g}); widen the band or change the structure",
              RuntimeWarning)
     return result
+
+
+def _unscaled(res: DSFResult, exps: dict[str, int], recs: list[Record], sp: StaticPoints) -> DSFResult:
+    """A solve on the signals times 2^-e (:func:`~graybox.core._least_squares.binary_scaled`) in the data's own
+    units: θ (refused where it is no float there), the band and the J's (output units²: 0 or inf where they leave the
+    float range, as y² there)."""
+    st = res.model.structure
+    theta = unscaled_theta(res.model.theta, list(st), exps)
+    refuse_beyond_float_range(st.terms, theta, prefix="se_dsf: the model cannot be used on these data: ")
+    with np.errstate(over="ignore", under="ignore"):
+        own = {k: float(np.ldexp(getattr(res, k), 2 * exps["y"])) for k in ("JS", "JSF", "band", "start_JS",
+                                                                            "start_JSF")}
+    return replace(res, model=Model(st, theta, name=res.model.name, **carried_from(recs, sp)), **own)
 
 
 def _solve(problem: SEProblem, **options) -> DSFResult:
