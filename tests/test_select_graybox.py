@@ -802,3 +802,15 @@ def test_an_output_whose_mean_squares_leave_the_float_range_is_refused_before_an
     with pytest.raises(ValueError, match=r"test record.*float range"):
         gb.select_graybox(gb.Candidates(2, 2, degree=degree), data.ident, validation=data.valid, test=recs[1],
                           estimator="ls")
+
+
+@pytest.mark.parametrize("option", [dict(fallback="min_jsf"), dict(lambdas=[0.5, 1.0])])
+@pytest.mark.parametrize("uncertainty", [None, 0.1])
+def test_gray_box_options_with_band_inf_say_what_band_inf_means(data, option, uncertainty):
+    # band=np.inf (no static requirement) with fallback= or lambdas= was refused with "no band was given and the
+    # static points carry no uncertainty": a band was given, and with δ the points do carry one
+    static = gb.StaticPoints(data.static.ubar, data.static.ybar, uncertainty=uncertainty)
+    d = gb.Dataset(data.ident, data.valid, static)
+    with pytest.raises(ValueError, match=r"band=inf asks for no static requirement") as info:
+        gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), d, band=np.inf, sizes=[3], **option)
+    assert "no band was given" not in str(info.value)

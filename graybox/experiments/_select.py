@@ -1449,6 +1449,7 @@ def select_graybox(
         arguments.
     """
     sp = static_info(static, data, curves=True)
+    no_requirement = isinstance(band, (float, np.floating)) and band == np.inf
     band = _band(band, sp)
     # read once: a generator is used up
     constraints = tuple(check_sequence(constraint_entries(constraints), "constraints",
@@ -1456,9 +1457,10 @@ def select_graybox(
     estimators = _estimators(estimator, band, constraints)
     if band is None and (lambdas is not None or fallback is not None):
         # a black box has no front and no band to miss: said, not ignored
+        why = ("band=inf asks for no static requirement; give a finite band B > 0 (output units²)" if no_requirement
+               else "no band was given and the static points carry no uncertainty; give band= (and static points)")
         raise ValueError(f"{'lambdas' if lambdas is not None else 'fallback'} applies to a gray box (a band on J_SF), "
-                         f"but this search is a black box ({', '.join(estimators)}): no band was given and the static "
-                         "points carry no uncertainty; give band= (and static points), or drop it")
+                         f"but this search is a black box ({', '.join(estimators)}): {why}, or drop it")
     sources = (sources,) if isinstance(sources, str) else check_sequence(sources, "sources")
     if sizes is not None:
         sizes = [check_int(s, "sizes", low=1) for s in check_sequence(sizes, "sizes")]
