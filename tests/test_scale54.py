@@ -482,3 +482,24 @@ def test_se_dsf_near_the_float_ranges_ends_solves_as_in_ordinary_units(ey, eu):
             assert getattr(got, nm) == pytest.approx(np.ldexp(getattr(ref, nm), 2 * ey), rel=1e-6, abs=1e-320), nm
         want = np.ldexp(1e-4, 2 * ey)
     assert far.band == pytest.approx(want, rel=1e-9, abs=1e-320)  # δ²'s mean: 0 or inf there, without a warning
+
+
+@pytest.mark.parametrize("ky", [-505, 0])
+def test_cls_uncertainty_of_a_term_the_static_points_pin_is_0_in_any_units(ky):
+    # the points lie on a curve through the origin, so how="points" fixes the constant at 0 (its θ 6.7e-16, round-off):
+    # its variance is 0 by the constraints, not a number. cls_uncertainty gave it the round-off (a standard deviation
+    # of 2.6e-18) and at y × 2^-505 refused: "the variance of the parameter of 1 ... is beyond the float range"
+    u, y = _plant()
+
+    def sds(ky):
+        rec, pts = gb.Record(u, np.ldexp(y, ky)), _qp_points(ky, 0)
+        unc = gb.cls_uncertainty(gb.cls(_QP_TERMS, rec, pts, how="points").model, rec, pts, how="points")
+        return unc.cov, np.sqrt(np.diag(unc.cov))
+
+    base_cov, base = sds(0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        cov, far = sds(ky)
+    assert not base_cov[0].any() and not cov[0].any() and not cov[:, 0].any()
+    assert np.all(base[1:] > 0)
+    np.testing.assert_allclose(far, _powers_of_two(base, _QP_TERMS, ky, 0), rtol=1e-6)

@@ -553,6 +553,31 @@ def _factor_cov(F: np.ndarray) -> np.ndarray:
         return np.ldexp(Fs.T @ Fs, e[:, None] + e[None, :])
 
 
+def _pinned_zeroed(cov: np.ndarray, F: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The covariance and its factor with the parameters the equality ``rows`` (θ's coordinates) fix exactly set to
+    variance 0: e_j in the rows' row space, judged on the rows with each column over the power of two of its norm
+    (exact; membership is unchanged by scaling a column, so the verdict is the same in any units). Their variance is
+    otherwise the projection's round-off (a standard deviation 1e-15 of the others'), which at y × 2^-505 fell below
+    the float range and was refused as a variance no float could hold."""
+    n = F.shape[1]
+    if rows.shape[0] == 0:
+        return cov, F
+    norms = scaled_norms(rows, axis=0)
+    cols = norms > 0
+    if not cols.any():
+        return cov, F
+    scaled = np.zeros_like(rows, dtype=float)
+    scaled[:, cols] = np.ldexp(rows[:, cols], -binary_exponent(norms[cols]))
+    Z, _ = _null_space(scaled, n)
+    pinned = cols & (np.linalg.norm(Z, axis=1) <= 1e-9)
+    if not pinned.any():
+        return cov, F
+    cov, F = np.array(cov, float), np.array(F, float)
+    cov[pinned, :] = cov[:, pinned] = 0.0
+    F[:, pinned] = 0.0
+    return cov, F
+
+
 def _refuse_beyond_float_range(F: np.ndarray, terms: Sequence, what: str) -> None:
     """``ValueError`` naming the terms whose parameter's variance (the square of its standard deviation, F's column
     norm, in the parameter's units²) is no float in these units: at u × 2^-300 u(k-1)²'s standard deviation is about
@@ -1020,6 +1045,7 @@ def cls_uncertainty(
                       "pass the CLS estimate with the data, static information and constraints it was estimated with",
                       d.N, z=z, z_round=None if fc.round is None else fc.round * d.s)
     cov, F, A = fc.back(cov, F, A)
+    cov, F = _pinned_zeroed(cov, F, A)  # the constraints fix them: variance 0 in any units, not round-off
     _refuse_beyond_float_range(F, st, "cls_uncertainty")
     return ParameterUncertainty(model, cov, level, dof, sigma2, "CLS", A, np.zeros((0, 0)), cov_factor=F)
 
