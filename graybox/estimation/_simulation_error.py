@@ -1875,11 +1875,11 @@ def se_pareto(
     ParetoSet
         All members, one per λ in the order of ``lambdas``, with J_1, J_S and J_SF from the shared
         evaluator (output units²: 0 or inf where they leave the float range, an output near 1e-160 or 1e160,
-        whose sweep runs on the signals times a power of two); the optimised cost is in ``extra["cost"]``, each member's largest local spectral radius along the
-        identification records in ``extra["radius"]`` (dimensionless) and the margin it was fitted
-        with in ``extra["margin"]`` (NaN: none). A λ whose fit failed (no feasible start, or no individual
-        with a finite cost) stays in the set as a failed member, with the reason in
-        ``failures``. Use ``.nondominated()`` for the front proper.
+        whose sweep runs on the signals times a power of two); the optimised cost is in ``extra["cost"]``, each
+        member's largest local spectral radius along the identification records in ``extra["radius"]``
+        (dimensionless) and the margin it was fitted with in ``extra["margin"]`` (NaN: none). A λ whose fit
+        failed (no feasible start, or no individual with a finite cost) stays in the set as a failed member,
+        with the reason in ``failures``. Use ``.nondominated()`` for the front proper.
 
     Raises
     ------
