@@ -467,14 +467,14 @@ def test_se_dsf_near_the_float_ranges_ends_solves_as_in_ordinary_units(ey, eu):
     # the band from the points' uncertainty δ (0.01 in ordinary units): at y × 2^-565 the band δ² and every J_S
     # underflowed to 0, at y × 2^520 they overflowed. Solved on the signals times powers of two (exact), the model is
     # the same, its J's, the band and the start's J's the same in the data's units (0 or inf beyond the range)
-    kw = dict(lambdas=[0.5], pe_lambdas=np.logspace(-4, 0, 6))
     st, rec, sp, _ = _se_data(0, 0)
-    ref = gb.se_dsf(st, rec, gb.StaticPoints(sp.ubar, sp.ybar, uncertainty=0.01), **kw)
+    start = SE_THETA * 0.9  # the one start (theta0, in the data's units): a single run, as fast as can be
+    ref = gb.se_dsf(st, rec, gb.StaticPoints(sp.ubar, sp.ybar, uncertainty=0.01), theta0=start)
     st, rec, sp, shift = _se_data(ey, eu)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", gb.StaticRangeWarning)
         far = gb.StaticPoints(sp.ubar, sp.ybar, uncertainty=np.ldexp(0.01, ey))
-        got = gb.se_dsf(st, rec, far, **kw)
+        got = gb.se_dsf(st, rec, far, theta0=np.ldexp(start, shift))
     np.testing.assert_allclose(got.model.theta, np.ldexp(ref.model.theta, shift), rtol=1e-9)
     assert (got.in_band, got.start, got.n_iter) == (ref.in_band, ref.start, ref.n_iter)
     with np.errstate(over="ignore", under="ignore"):
@@ -503,3 +503,4 @@ def test_cls_uncertainty_of_a_term_the_static_points_pin_is_0_in_any_units(ky):
     assert not base_cov[0].any() and not cov[0].any() and not cov[:, 0].any()
     assert np.all(base[1:] > 0)
     np.testing.assert_allclose(far, _powers_of_two(base, _QP_TERMS, ky, 0), rtol=1e-6)
+
