@@ -504,3 +504,26 @@ def test_cls_uncertainty_of_a_term_the_static_points_pin_is_0_in_any_units(ky):
     assert np.all(base[1:] > 0)
     np.testing.assert_allclose(far, _powers_of_two(base, _QP_TERMS, ky, 0), rtol=1e-6)
 
+
+@pytest.mark.parametrize("ey", [-565, 520])
+def test_se_uncertainty_refuses_a_variance_beyond_the_float_range_in_the_users_units(ey):
+    # y × 2^-565: σ² (output units², about 2^-1130) underflowed and se_uncertainty returned a covariance of 0 (every
+    # parameter known exactly, from noisy data) without a word; at y × 2^520 it warned 'overflow encountered in
+    # matmul' (an error here) and said "non-finite derivatives". Now refused as cls_uncertainty refuses it; at
+    # y × 2^-300 the standard deviations are the ordinary units' scaled
+    st, rec, sp, _ = _se_data(0, 0)
+    theta = gb.se_pareto(st, rec, sp, lambdas=[0.5], method="gradient", max_nfev=10, margin=None,
+                         progress=False).thetas[0]
+    base = np.sqrt(np.diag(gb.se_uncertainty(gb.Model(st, theta), rec, sp, lambda1=0.5).cov))
+    for e in (-300, ey):
+        st, rec, sp, shift = _se_data(e, 0)
+        model = gb.Model(st, np.ldexp(theta, shift))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", gb.StaticRangeWarning)
+            if e == -300:
+                sd = np.sqrt(np.diag(gb.se_uncertainty(model, rec, sp, lambda1=0.5).cov))
+                np.testing.assert_allclose(sd, np.ldexp(base, shift), rtol=1e-6)
+                continue
+            with pytest.raises(ValueError, match=r"^se_uncertainty: the noise variance σ² and the covariance are in "
+                                                 r"output units².*beyond the float range in these units: rescale"):
+                gb.se_uncertainty(model, rec, sp, lambda1=0.5)

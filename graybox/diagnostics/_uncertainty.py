@@ -62,8 +62,8 @@ from ..static._surfaces import StaticSurface
 from ..estimation._decisions import Decision
 from ..models._coerce import as_model, records_of, static_info, static_points
 from ..models._model import Model
-from ..core._least_squares import (binary_exponent, check_rows, one_blas_thread, rank_tolerance, scaled_norm,
-                                   scaled_norms)
+from ..core._least_squares import (binary_exponent, check_rows, one_blas_thread, output_scale, rank_tolerance,
+                                   scaled_norm, scaled_norms)
 from ..core._simulation_kernels import free_run_sensitivity_blocks, inverse_ma_filter
 from ..core._terms import Structure, check_input_names
 from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, check_units, require_lengths
@@ -1260,6 +1260,8 @@ def se_uncertainty(
         names = recs[0].input_names
         sp = StaticPoints(np.zeros((1, len(names))) if len(names) > 1 else [0.0], [0.0], input_names=names)
     problem = SEProblem(m.structure, recs, sp)
+    # as for CLS and PE: at y × 2^-565 σ² underflowed and the covariance came out 0, at y × 2^520 it overflowed
+    _check_variance_units(output_scale(np.concatenate([np.asarray(r.y, float) for r in recs])), "se_uncertainty")
     n, nd, M = len(m.structure), problem.n_dyn, len(sp)
     th = m.theta
     # the weighted problem of eq. (13) in the solvers' coordinates z (SEProblem.to_z): θ · scale, or for a structure
