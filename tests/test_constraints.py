@@ -372,3 +372,22 @@ def test_cluster_bound_keys_take_every_form_cluster_powers_takes_and_only_intege
                        ((1, -1), ValueError)):
         with pytest.raises(error, match="cluster"):
             ClusterBounds({bad: (0.0, 1.0)})
+
+
+def test_a_bound_far_beyond_the_fit_is_not_called_one_no_theta_meets():
+    # Σ0 <= -1e7 on an output of order 1: any θ with that constant meets it (at -1e6 cls gives the least squares of
+    # the other terms with the constant held, to 2e-11), but Clarabel reported 'infeasible' and cls said "the
+    # constraints admit no θ", which is false; a linear program on the rows alone finds a θ, and the error says so
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(0.5, 2.0, 31), 10)[:300]
+    y = np.zeros(300)
+    for k in range(1, 300):
+        y[k] = 0.7 * y[k - 1] + 0.2 * u[k - 1] + 0.05 * u[k - 1] ** 2
+    r = Record(u, y + 0.01 * rng.standard_normal(300))
+    st = Structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"])
+    th = cls(st, r, constraints=ClusterBounds({"Σ0": (None, -1e6)})).model.theta
+    X = np.column_stack([r.y[:-1], u[:-1], u[:-1] ** 2])
+    np.testing.assert_allclose(th[1:], np.linalg.lstsq(X, r.y[1:] + 1e6, rcond=None)[0], rtol=1e-8)
+    with pytest.raises(InfeasibleError, match=r"these constraints alone admit θ.*failed numerically") as info:
+        cls(st, r, constraints=ClusterBounds({"Σ0": (None, -1e7)}))
+    assert "admit no θ" not in str(info.value)

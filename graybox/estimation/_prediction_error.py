@@ -871,6 +871,23 @@ def _quad(y: cp.Variable, H: np.ndarray) -> cp.Expression:
     return cp.quad_form(y, cp.psd_wrap(H))
 
 
+def _rows_feasible(V: np.ndarray, g: np.ndarray, G: np.ndarray, h: np.ndarray) -> bool:
+    """Whether some δ meets V δ = g and G δ <= h (a linear program, HiGHS): the feasibility of the rows alone, without
+    the objective. Each row is taken over the power of two of its largest |entry|, and δ in units of the power of two
+    of the largest right-hand side (δ is free: neither changes the answer), so that HiGHS sees entries and bounds of
+    order 1, not a bound of 1e8 (which it reads as infeasible where its rows hold 1e-8 after a row's scaling)."""
+    from scipy.optimize import linprog
+
+    A, b = np.vstack([V, G]), np.concatenate([g, h])
+    e = binary_exponent(np.max(np.abs(A), axis=1, initial=0.0))
+    A, b = np.ldexp(A, -e[:, None]), np.ldexp(b, -e)
+    b = np.ldexp(b, -binary_exponent(np.max(np.abs(b), initial=0.0)))
+    m = V.shape[0]
+    res = linprog(np.zeros(A.shape[1]), A_ub=A[m:] if A.shape[0] > m else None, b_ub=b[m:] if A.shape[0] > m else None,
+                  A_eq=A[:m] if m else None, b_eq=b[:m] if m else None, bounds=(None, None), method="highs")
+    return bool(res.status == 0)
+
+
 def _member_failure(exc: ValueError) -> ValueError:
     """``exc`` marked as one solve's failure (the solver stopped at its limit, failed numerically, or returned no
     optimum), which a sweep keeps as that member's failure (:func:`pe_members`), not the whole call's; constraints
@@ -963,6 +980,8 @@ class _QP:
         for c in rows.user:
             cons_cp.extend(c.constraints(theta, ctx))
         self.problem = cp.Problem(cp.Minimize(obj), cons_cp)
+        # the affine rows alone (in δ), to tell constraints that admit no θ from a solve that failed numerically
+        self.affine = None if rows.user else (rows.V, rows.g / sig, rows.G, rows.h / sig)
         # First warm start: the LS estimate (OSQP converges slowly from elsewhere when λ1 is
         # tiny); later solves start from the previous one.
         self.dy.value = np.zeros(k)
@@ -1024,6 +1043,14 @@ class _QP:
         self.solved = True
         st = self.problem.status
         if st in (cp.INFEASIBLE, cp.INFEASIBLE_INACCURATE):
+            if self.affine is not None and _rows_feasible(*self.affine):
+                # Σ0 <= -1e7 on an output of order 1: any θ with that constant meets it, yet Clarabel said
+                # 'infeasible' and this said "the constraints admit no θ"
+                raise _member_failure(InfeasibleError(
+                    f"solver {self.solver} reports status {st!r} for {list(self.names)}, but these constraints "
+                    "alone admit θ (a linear program on them finds one): the solve failed numerically, most likely "
+                    "a bound far beyond what these data's fit reaches (check the bounds' units: output units for a "
+                    "cluster's sum, against an output whose spread is " f"{self.sigma:.3g})"))
             raise InfeasibleError(
                 f"the constraints admit no θ: solver {self.solver} reports status {st!r} for "
                 f"{list(self.names) or ['(none)']}"
