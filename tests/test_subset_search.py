@@ -262,3 +262,10 @@ def test_result_prints_and_frames_with_its_search():
     assert list(frame["term"]) == [str(t) for t in sel.structure]
     assert sel.subset_rss.flags.writeable is False
     assert frols(TWO_CAND, rec, n_terms=4).subsets == ()
+
+
+@pytest.mark.parametrize("result", [gb.Selection, gb.SEMPResult])
+def test_the_results_criterion_attribute_names_every_criterion(result):
+    # frols and semp store EBIC's curve under criterion="ebic"; the attribute's text listed aic, bic and fpe only
+    doc = result.__doc__.split("criterion : str", 1)[1].split("\n    ", 2)[1]
+    assert all(f'``"{name}"``' in doc for name in fr.CRITERIA), doc

@@ -213,7 +213,7 @@ class Selection(Relocked):
     rss : ndarray, shape (K,)
         Residual sum of squares after 1 … K terms (output units²).
     criterion : str
-        The criterion of :attr:`criterion_curve` (``"aic"``, ``"bic"`` or ``"fpe"``).
+        The criterion of :attr:`criterion_curve` (``"aic"``, ``"bic"``, ``"fpe"`` or ``"ebic"``).
     criterion_curve : ndarray, shape (K,)
         That criterion for models of 1 … K terms.
     stop : str

@@ -77,7 +77,7 @@ class SEMPResult(Relocked):
         NaN for terms already in the structure, inf for a diverging or collinear candidate):
         the terms tried and their scores.
     criterion : str
-        The information criterion of the path (``"aic"``, ``"bic"`` or ``"fpe"``).
+        The information criterion of the path (``"aic"``, ``"bic"``, ``"fpe"`` or ``"ebic"``).
     stop : str
         Why selection stopped, in words.
     n_rows : int
