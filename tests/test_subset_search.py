@@ -269,3 +269,27 @@ def test_the_results_criterion_attribute_names_every_criterion(result):
     # frols and semp store EBIC's curve under criterion="ebic"; the attribute's text listed aic, bic and fpe only
     doc = result.__doc__.split("criterion : str", 1)[1].split("\n    ", 2)[1]
     assert all(f'``"{name}"``' in doc for name in fr.CRITERIA), doc
+
+
+@pytest.mark.parametrize("y_scale", [1.0, 2.0**-505])
+def test_centred_ebic_curve_counts_the_subsets_the_search_compared(y_scale):
+    # centre=True stored the closure refit's curve, whose terms are all 'included' there: its 'ebic' read BIC's
+    # values. The closure's first k terms hold min(k, 3) the search chose, 1 included and the others among p
+    rng = np.random.default_rng(4)
+    n = 300
+    uc = np.repeat(rng.uniform(-1, 1, n // 5 + 1), 5)[:n]
+    yc, e = np.zeros(n), 0.01 * rng.standard_normal(n)
+    for k in range(2, n):
+        yc[k] = 0.5 * yc[k - 1] + 0.4 * uc[k - 2] + 0.3 * uc[k - 1] * yc[k - 1] + e[k]
+    rec = Record(uc + 5.0, (yc + 3.0) * y_scale)
+    cand = Candidates(2, 2, degree=2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", CandidateWarning)
+        sel = frols(cand, rec, search="exact", criterion="ebic", n_terms=3, include=["y(k-1)"], centre=True)
+    assert sel.criterion == "ebic" and sel.skipped == ()
+    assert "u(k-1)y(k-1)" in [str(t) for t in sel.structure[:3]] and len(sel.rss) > 3  # the closure adds terms
+    p = len(cand.process) - 1
+    k = np.arange(1, len(sel.rss) + 1)
+    bic = sel.n_rows * np.log(sel.rss / sel.n_rows) + k * np.log(sel.n_rows)
+    ln_subsets = np.log([float(math.comb(p, int(j))) for j in np.minimum(k, 3) - 1])
+    np.testing.assert_allclose(sel.criterion_curve, bic + 2 * ln_subsets, rtol=1e-9)

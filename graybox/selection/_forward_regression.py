@@ -86,6 +86,9 @@ __all__ = ["Selection", "frols", "CandidateWarning", "CRITERIA", "information_cr
 #: Information criteria understood by :func:`frols`.
 CRITERIA: tuple[str, ...] = ("aic", "bic", "fpe", "ebic")
 
+#: Why a candidate dropped during the forward pass was (it stays among EBIC's p: the search looked at it).
+_DEPENDENT = "linear combination of the selected terms"
+
 #: Candidates shown by default when the criterion has no stopping role.
 _DEFAULT_MAX_TERMS = 50
 
@@ -804,7 +807,7 @@ def frols(
                                    n_included=n_included, search=search)
     C, g = _chosen_factors(cols, process, chosen)
     if n_dependent:
-        dep_terms = [t for t, why in skipped if why.startswith("linear")]
+        dep_terms = [t for t, why in skipped if why == _DEPENDENT]
         said.append(f"{n_dependent} candidate(s) dropped as linear combinations of selected terms on these data: "
                     + ", ".join(str(t) for t in dep_terms[:10]) + (", …" if len(dep_terms) > 10 else ""))
     if said:
@@ -882,6 +885,19 @@ def _unscaled_curve(name: str, rss: np.ndarray, N: int, ey: int, n_free: int, n_
     return information_criterion(name, rss, N, **kw) + N * 2 * ey * math.log(2.0)
 
 
+def _closure_curve(name: str, rss: np.ndarray, N: int, ey: int, n_free: int, n_included: int,
+                   n_chosen: int) -> np.ndarray:
+    """:func:`_unscaled_curve` of a closure's nested fits whose first ``n_chosen`` terms the search chose: EBIC counts
+    the subsets of the first min(k, n_chosen) terms (what the closure adds beyond them is not chosen)."""
+    if name != "ebic":
+        return _unscaled_curve(name, rss, N, ey, n_free, n_included)
+    k = min(n_chosen, rss.size)
+    at_n = np.full(k, float(N))  # RSS = N: the log term is 0, the criteria are their penalties
+    ln_subsets = (information_criterion("ebic", at_n, N, n_candidates=n_free, n_included=n_included)
+                  - information_criterion("bic", at_n, N))
+    return _unscaled_curve("bic", rss, N, ey, n_free, n_included) + ln_subsets[np.minimum(np.arange(rss.size), k - 1)]
+
+
 def _frols_centred(candidates: Structure, data: object, **options) -> Selection:
     """frols(centre=True): select on the centred signals, close the choice under shifts, refit (see frols)."""
     # the whole of it (the search, the closure's told_apart, its fit and the subsets' RSS) on y and each input times
@@ -922,14 +938,16 @@ def _frols_centred(candidates: Structure, data: object, **options) -> Selection:
     stop = _centring.stop_note(sel.stop, len(sel.structure), len(full), unscaled_levels(offsets, exps), dropped)
     theta = unscaled_theta(_centring.raw_theta(closed, fit.theta, offsets), list(closed), exps)
     refuse_beyond_float_range(list(closed), theta, prefix="frols: ")
+    # the closure's curve in the data's own units, counted as the search chose (the refit includes every term: its
+    # EBIC compared no subsets): its first k terms hold min(k, chosen) the search chose, the included ones among them,
+    # the others among the usable candidates besides the included (what the closure adds, nobody chose)
+    n_included = len(candidates.process.positions(options["include"], "included term"))
+    n_free = sel.n_candidates - n_included - sum(why != _DEPENDENT for _, why in sel.skipped)
+    fit = replace(fit, criterion_curve=_closure_curve(fit.criterion, fit.rss, fit.n_rows, exps.get("y", 0), n_free,
+                                                      n_included, len(sel.structure)))
     if exps:
         stacked_regressors(Structure(list(closed)), given)  # a column beyond the float range in the data's units
-        # RSS and the criterion curve in the data's own units (the fit's rows: L on, of each record)
-        n_rows = sum(len(r.y) - L for r in as_gram_records(data))
-        fit = replace(fit, rss=unscaled_rss(fit.rss, exps),
-                      # the closure's refit includes all its terms: none chosen, EBIC's subset count is 1
-                      criterion_curve=_unscaled_curve(fit.criterion, fit.rss, n_rows, exps.get("y", 0), 0,
-                                                      len(closed)))
+        fit = replace(fit, rss=unscaled_rss(fit.rss, exps))
         subset_rss = unscaled_rss(np.asarray(subset_rss), exps) if len(subset_rss) else subset_rss
     return replace(fit, theta=theta, stop=stop, n_candidates=sel.n_candidates, skipped=skipped, search=sel.search,
                    subsets=subsets, subset_rss=subset_rss)
@@ -1053,12 +1071,12 @@ def _forward(cols: _Columns, process: Structure, forced: list[int], K: int, rule
         dep = active & (nrm <= dependent_thr * nrm0)
         if dep.any():
             for j in np.flatnonzero(dep):
-                skipped.append((process[j], "linear combination of the selected terms"))
+                skipped.append((process[j], _DEPENDENT))
             active &= ~dep
             n_dependent += int(dep.sum())
         if not active.any():
             if rule is not None and rule.mode == "n_terms":
-                dep_terms = [str(t) for t, why in skipped if why.startswith("linear")]
+                dep_terms = [str(t) for t, why in skipped if why == _DEPENDENT]
                 raise FewerTermsError(
                     f"only {k} independent terms could be selected on these data, n_terms = {rule.n_terms} asked: "
                     f"the remaining candidates are linear combinations of the selected ones "
