@@ -285,7 +285,8 @@ def semp(
         Relative free-run error in (0, 1) that ends the search.
     criterion : {"aic", "bic", "fpe", "ebic"}, optional
         Information criterion of the free-run error (see :func:`graybox.information_criterion`; default
-        ``"bic"``; EBIC counts the candidates besides the included ones).
+        ``"bic"``; EBIC's p counts the candidates besides the included ones and those all-zero on these data,
+        where frols also leaves out candidates the data cannot tell apart, so frols's p can be smaller).
     max_terms : int, optional
         Largest structure looked at (``tol`` and ``criterion``; default min(30, candidates,
         samples after the largest lag − 1), what the record carries; a larger explicit one is an
