@@ -293,3 +293,23 @@ def test_centred_ebic_curve_counts_the_subsets_the_search_compared(y_scale):
     bic = sel.n_rows * np.log(sel.rss / sel.n_rows) + k * np.log(sel.n_rows)
     ln_subsets = np.log([float(math.comb(p, int(j))) for j in np.minimum(k, 3) - 1])
     np.testing.assert_allclose(sel.criterion_curve, bic + 2 * ln_subsets, rtol=1e-9)
+
+
+def test_semp_counts_ebic_candidates_as_frols_does():
+    # a ±1 input makes u(k-1)^2 the constant's column: frols skips it (p = 5 of 6) and semp counted it (review58e)
+    rng = np.random.default_rng(0)
+    u = np.sign(rng.uniform(-1, 1, 300))
+    y = np.zeros(300)
+    for k in range(1, 300):
+        y[k] = 0.5 * y[k - 1] + u[k - 1] + 0.05 * rng.standard_normal()
+    rec, cand = Record(u, y), Candidates(1, 1, degree=2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        p = len(cand.process) - len(frols(cand, rec, criterion="ebic", max_terms=4).skipped)
+        path = gb.semp(cand, rec, criterion="ebic", max_terms=4).path
+    assert p == 5
+    path = path[path["n_terms"] > 0]
+    N = len(rec.y) - cand.max_lag
+    bic = N * np.log(path["score"].to_numpy()) + path["n_terms"].to_numpy() * np.log(N)
+    ln_subsets = np.log([float(math.comb(p, int(k))) for k in path["n_terms"]])
+    np.testing.assert_allclose(path["criterion"].to_numpy(), bic + 2 * ln_subsets, rtol=1e-12)

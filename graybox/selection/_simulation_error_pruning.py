@@ -45,7 +45,7 @@ from ..core._regressors import refuse_non_finite_columns, stacked_regressors
 from ..core._simulation_kernels import batch_sse, encode, input_products, record_inputs
 from ..models._model import Model, model_input_names
 from ..core._records import Dataset, Record, as_records, carried_from, check_units, require_lengths
-from ._forward_regression import CRITERIA, CandidateWarning, criterion_of_sizes
+from ._forward_regression import _DUPLICATE_TOL, CRITERIA, CandidateWarning, criterion_of_sizes
 from ._stopping import choose_model, stop_rule
 from ..core._terms import Structure, Term, structure_of
 from . import _centring
@@ -285,8 +285,8 @@ def semp(
         Relative free-run error in (0, 1) that ends the search.
     criterion : {"aic", "bic", "fpe", "ebic"}, optional
         Information criterion of the free-run error (see :func:`graybox.information_criterion`; default
-        ``"bic"``; EBIC's p counts the candidates besides the included ones and those all-zero on these data,
-        where frols also leaves out candidates the data cannot tell apart, so frols's p can be smaller).
+        ``"bic"``; EBIC's p counts the candidates besides the included ones, the all-zero ones and those
+        proportional to another on these data, as frols counts its usable candidates).
     max_terms : int, optional
         Largest structure looked at (``tol`` and ``criterion``; default min(30, candidates,
         samples after the largest lag − 1), what the record carries; a larger explicit one is an
@@ -490,6 +490,24 @@ def _options(candidates: Structure, n_terms: int | None, tol: float | None, crit
     return _Options(process, n_terms, tol, criterion, mode, crit, forced, limit, prune, prune_tol, rank_tol, threads)
 
 
+def _free_candidates(S: np.ndarray, zero: np.ndarray, forced: list[int]) -> int:
+    """EBIC's p: the candidates a term can be chosen among, counted as frols counts its usable ones: not included,
+    not all-zero, and not proportional to an included or earlier counted candidate (|cos| > 1 − _DUPLICATE_TOL on
+    ``S``, the triangular factor's candidate columns)."""
+    G = S.T @ S
+    d = np.sqrt(np.maximum(np.diag(G), np.finfo(float).tiny))
+    kept = [j for j in forced if not zero[j]]
+    n = 0
+    for j in range(S.shape[1]):
+        if j in forced or zero[j]:
+            continue
+        if kept and np.max(np.abs(G[j, kept]) / (d[j] * d[kept])) > 1.0 - _DUPLICATE_TOL:
+            continue
+        kept.append(j)
+        n += 1
+    return n
+
+
 class _Search:
     """The state of a SEMP search: the current structure, its θ and score, the structures visited, the path."""
 
@@ -497,8 +515,7 @@ class _Search:
         self.sc, self.opt = sc, opt
         self.names = [str(t) for t in opt.process]
         self.current = list(opt.forced)
-        # EBIC's p: the candidates a term can be chosen among (not included, not all-zero on these data)
-        self.n_free = sum(1 for j in range(len(self.names)) if j not in opt.forced and not sc.zero[j])
+        self.n_free = _free_candidates(sc.R[:, :-1], sc.zero, opt.forced)
         zero = [self.names[j] for j in opt.forced if sc.zero[j]]
         if zero:  # in frols's words: one zero column is not 'collinear'
             raise ValueError(f"included term {zero[0]} cannot be used on these data: all-zero column")
