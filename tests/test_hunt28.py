@@ -341,9 +341,9 @@ def test_a_saved_graybox_selection_loads_in_a_new_session(tmp_path):
 
     units = [u for u, _, _ in LAYERS]
     above_io = set(units[units.index("io") + 1:])
-    above = {name for name, (cls, _) in io._CODECS.items() if cls.__module__.split(".")[1] in above_io}
+    above = {name for name in io._CODECS if io._cls(name).__module__.split(".")[1] in above_io}
     assert above == set(io._REGISTERED_ABOVE)  # every type a layer above registers is found from its name
-    assert all(io._REGISTERED_ABOVE[name] == io._CODECS[name][0].__module__ for name in above)
+    assert all(io._REGISTERED_ABOVE[name] == io._cls(name).__module__ for name in above)
 
 
 def test_a_file_a_newer_graybox_wrote_with_a_field_this_one_lacks_says_to_upgrade():

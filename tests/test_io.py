@@ -4,6 +4,8 @@ import ast
 import json
 import re
 import struct
+import subprocess
+import sys
 import warnings
 from dataclasses import fields
 from pathlib import Path
@@ -143,8 +145,8 @@ def test_a_selection_saved_before_subset_search_loads_as_greedy(values):
 
 
 def test_every_constructor_field_is_saved():
-    for name, (cls, spec) in _io._CODECS.items():
-        assert {f.name for f in fields(cls)} == {k for k, _ in spec}, name
+    for name, (_, spec) in _io._CODECS.items():
+        assert {f.name for f in fields(_io._cls(name))} == {k for k, _ in spec}, name
 
 
 def test_the_file_is_readable(values, tmp_path):
@@ -431,6 +433,28 @@ def test_registering_a_saved_type_cannot_replace_or_duplicate_one():
     with pytest.raises(ValueError, match="unknown field kind"):
         _io.register_type("Thing", type("Thing", (), {}), (("x", "integer"),))
     assert "Model2" not in _io._CODECS and "Thing" not in _io._CODECS
+
+
+
+def test_saving_and_loading_a_model_leaves_pandas_unloaded(values, tmp_path):
+    # the codec table named OEResult and SEMPResult, whose modules import pandas (~0.3 s) at the top: a first
+    # gb.save of a Model in a fresh process loaded it for no table; a result's module is imported where one is met
+    code = ("import sys, numpy as np, graybox as gb\n"
+            "m = gb.Model(structure=gb.Structure(['y(k-1)', 'u(k-1)']), theta=np.array([0.5, 0.25]))\n"
+            "text = gb.to_json(m)\n"
+            "gb.save(m, sys.argv[1])\n"
+            "back = gb.load(sys.argv[1], expect=gb.Model)\n"
+            "assert back.theta.tolist() == [0.5, 0.25] and gb.from_json(text).structure == m.structure\n"
+            "assert 'pandas' not in sys.modules, 'pandas imported'\n"
+            "assert 'graybox.estimation._output_error' not in sys.modules\n")
+    subprocess.run([sys.executable, "-c", code, str(tmp_path / "m.json")], check=True)
+    # a file naming a result loads in a fresh process: its module is imported then
+    oe = tmp_path / "oe.json"
+    gb.save(values["oe"], oe)
+    code = ("import sys, graybox as gb\n"
+            "r = gb.load(sys.argv[1])\n"
+            "assert type(r).__name__ == 'OEResult' and 'pandas' in sys.modules\n")
+    subprocess.run([sys.executable, "-c", code, str(oe)], check=True)
 
 
 @pytest.mark.parametrize("frame", [

@@ -77,9 +77,7 @@ from ..models._model import Model
 from ..estimation._neural import NeuralFit, NeuralModel
 from ..estimation._pareto import ParetoSet
 from ..estimation._epsilon_constraint import DSFResult
-from ..estimation._output_error import OEResult
 from ..selection._forward_regression import Selection
-from ..selection._simulation_error_pruning import SEMPResult
 from ..core._records import Dataset, Record, RecordPrint, StaticPoints, check_units, record_print
 from ..core._files import bom_encoding, write_atomically
 from ..core._validation import MAX_NESTING, FrozenMap, check_path, locked
@@ -513,8 +511,8 @@ def _enc_plain(v: Any, where: str, depth: int = 0) -> Any:
                                                               for i, x in enumerate(v)]}
     if isinstance(v, Mapping):
         return {"map": _enc_plain_map(v, where, depth)}
-    if type(v) in _TYPES:
-        return {"type": {"type": _TYPES[type(v)], "object": _encode_fields(v)}}
+    if _type_name(type(v)) is not None:
+        return {"type": {"type": _type_name(type(v)), "object": _encode_fields(v)}}
     why = _why_not(v)
     raise ValueError(f"cannot save {where}: " + (why or f"a {type(v).__name__}, which graybox does not save"))
 
@@ -615,7 +613,10 @@ def _dec_plain(v: Any, where: str, rd: _Reader, depth: int = 0) -> Any:
         raise rd.fail(f"{at}.shape", f"no array has the shape {reprlib.repr(list(shape))} ({exc})") from None
 
 
-_CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
+#: Per saved type, its class and its constructor's fields as (name, kind). A class whose module imports pandas at the
+#: top (OEResult, SEMPResult) is named by that module instead, imported where a file names the type (:func:`_cls`) or a
+#: value of it is written (then already imported): ``gb.save(model)`` in a fresh process loads no pandas (~0.3 s).
+_CODECS: dict[str, tuple[type | str, tuple[tuple[str, str], ...]]] = {
     "StaticPoints": (StaticPoints, (("ubar", "inputs"), ("ybar", "array1"), ("name", "str"), ("input_names", "names"),
                                     ("uncertainty", "array1_or_none"), ("units", "names"))),
     "StaticCurve": (StaticCurve, (("coefficients", "array1"), ("domain", "floats_or_none"), ("name", "str"))),
@@ -645,13 +646,13 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
                               ("stopped", "str"), ("rmse_train", "float"), ("rmse_sim", "float"), ("seconds", "float"))),
     "Decision": (Decision, (("rule", "str"), ("index", "int"), ("lambda1", "float"), ("JS", "float"), ("JSF", "float"),
                             ("in_band", "bool"), ("score", "float"), ("model", "Model"), ("chosen_on", "str"))),
-    "SEMPResult": (SEMPResult, (("structure", "structure"), ("theta", "array1"), ("score", "float"), ("path", "frame"),
+    "SEMPResult": ("graybox.selection._simulation_error_pruning", (("structure", "structure"), ("theta", "array1"), ("score", "float"), ("path", "frame"),
                                 ("forward_scores", "frame"), ("criterion", "str"), ("stop", "str"), ("n_rows", "int"),
                                 ("input_names", "names"), ("Ts", "float_or_none"), ("units", "names"))),
     "DSFResult": (DSFResult, (("model", "Model"), ("JS", "float"), ("JSF", "float"), ("band", "float"),
                               ("in_band", "bool"), ("start", "str"), ("start_JS", "float"), ("start_JSF", "float"),
                               ("n_iter", "int"), ("message", "str"), ("margin", "float"))),
-    "OEResult": (OEResult, (("model", "Model"), ("JS", "float"), ("JS_choose", "float"), ("chosen_on", "str"),
+    "OEResult": ("graybox.estimation._output_error", (("model", "Model"), ("JS", "float"), ("JS_choose", "float"), ("chosen_on", "str"),
                             ("start", "str"), ("starts", "frame"), ("margin", "float"), ("radius", "float"),
                             ("seed", "seed"))),
     "ParameterUncertainty": (ParameterUncertainty, (("method", "str"), ("model", "Model"), ("cov", "array2"),
@@ -718,12 +719,12 @@ def register_type(name: str, cls: type, spec: tuple[tuple[str, str], ...]) -> No
     unknown = sorted({kind for _, kind in spec} - _KINDS - set(_CODECS))
     if unknown:
         raise ValueError(f"unknown field kind(s) {unknown} for {name!r}; kinds: {sorted(_KINDS | set(_CODECS))}")
-    old = _CODECS.get(name)
+    old = (_cls(name), _CODECS[name][1]) if name in _CODECS else None
     same_class = old is not None and (old[0].__module__, old[0].__qualname__) == (cls.__module__, cls.__qualname__)
     if old is not None and not (same_class and old[1] == spec):  # a module reloaded may register its class again
         raise ValueError(f"a saved type named {name!r} exists already")
-    if cls in _TYPES and _TYPES[cls] != name:
-        raise ValueError(f"{cls.__qualname__} is saved as {_TYPES[cls]!r} already")
+    if _type_name(cls) not in (None, name):
+        raise ValueError(f"{cls.__qualname__} is saved as {_type_name(cls)!r} already")
     if old is not None:
         _TYPES.pop(old[0], None)
     _CODECS[name] = (cls, spec)
@@ -761,7 +762,27 @@ _READABLE: dict[str, tuple[tuple[str, ...], Callable[[Any], Mapping[str, Any]]]]
               lambda m: {"equation": m.equation(digits=6), "clusters": {k: _num(v) for k, v in m.clusters().items()}}),
 }
 
-_TYPES = {cls: name for name, (cls, _) in _CODECS.items()}
+#: Saved type's name by class, for the classes imported so far (:func:`_type_name` adds the others when met).
+_TYPES = {cls: name for name, (cls, _) in _CODECS.items() if isinstance(cls, type)}
+
+
+def _cls(name: str) -> type:
+    """The class of the saved type ``name``, its module imported now where the table names it by its module."""
+    cls, spec = _CODECS[name]
+    if isinstance(cls, str):
+        cls = getattr(importlib.import_module(cls), name)
+        _CODECS[name] = (cls, spec)
+        _TYPES[cls] = name
+    return cls
+
+
+def _type_name(cls: type) -> str | None:
+    """The saved type's name of the class ``cls`` (None: not a saved type). A value's class is imported already: one
+    the table names by its module is looked up by its module and name, importing nothing."""
+    name = _TYPES.get(cls)
+    if name is None and _CODECS.get(cls.__name__, (None,))[0] == cls.__module__ and _cls(cls.__name__) is cls:
+        name = cls.__name__
+    return name
 
 #: A field a file may lack reads as the constructor's default (see :data:`_ADDED`).
 _DEFAULT = object()
@@ -830,9 +851,9 @@ def _dec_print(v: Any, where: str, rd: _Reader) -> RecordPrint:
 def _saved_name(obj: Any, where: str) -> str:
     """The saved type's name of ``obj``, held in the field ``where``; ``ValueError`` for a value of another type (a
     subclass of a saved type: a file holds graybox's own types, and would read it back without the subclass)."""
-    name = _TYPES.get(type(obj))
+    name = _type_name(type(obj))
     if name is None:
-        base = next((c.__name__ for c in type(obj).__mro__[1:] if c in _TYPES), None)
+        base = next((c.__name__ for c in type(obj).__mro__[1:] if _type_name(c) is not None), None)
         raise ValueError(f"cannot save {where or 'the value'}: a {type(obj).__name__}"
                          + (f", a subclass of {base}; a file holds graybox's own types, and would load it as a "
                             f"{base}: give a {base}" if base else ", which graybox does not save"))
@@ -848,7 +869,7 @@ def _encode_fields(obj: Any, where: str = "") -> dict:
 
 
 def _decode_fields(name: str, v: Any, where: str, rd: _Reader) -> Any:
-    cls, spec = _CODECS[name]
+    cls, spec = _cls(name), _CODECS[name][1]
     d = rd.dict(v, where)
     for old, (new, read) in _RENAMED.get(name, {}).items():
         if old in d and new not in d:
@@ -957,13 +978,13 @@ def to_json(obj: Any, *, units: tuple[str, str] | Mapping[str, str] | None = Non
         simulator, …: the field is named), or a table the format cannot carry; ``units`` that contradict
         the value's own.
     """
-    if type(obj) not in _TYPES:
-        hint = "; save its .model" if type(getattr(obj, "model", None)) in _TYPES else ""
+    if _type_name(type(obj)) is None:
+        hint = "; save its .model" if _type_name(type(getattr(obj, "model", None))) is not None else ""
         why = _why_not(obj)
         what = why if why else f"a {type(obj).__name__}"
         raise ValueError(f"cannot save {what}; graybox saves {sorted(_CODECS)}{hint}")
     doc: dict[str, Any] = {"format": "graybox", "format_version": FORMAT_VERSION, "graybox_version": graybox_version(),
-                           "type": _TYPES[type(obj)]}
+                           "type": _type_name(type(obj))}
     own = _own_units(obj)
     given = units
     u = _units_arg(units)
@@ -1065,18 +1086,19 @@ def _expected(expect: object) -> tuple[type, ...] | None:
         if not isinstance(w, type):
             raise TypeError(f"expect must be a graybox type (e.g. graybox.Model) or a tuple of them, got {w!r} "
                             f"({type(w).__name__})")
-        if w not in _TYPES:
+        if _type_name(w) is None:
             raise ValueError(f"expect must be one of graybox's saved types {sorted(_CODECS)}, got {w!r}")
     return want
 
 
 def _expect(want: tuple[type, ...] | None, typ: str, source: str, obj: object = None) -> None:
-    if want is not None and _CODECS[typ][0] not in want:
+    wanted = set() if want is None else {_type_name(w) for w in want}  # by name: a file's type imports nothing
+    if want is not None and typ not in wanted:
         # a value that carries one asked for (an ELSResult's model, a Dataset's records): how to have it; a field
         # that may be None is named only where the file's object holds one (a Dataset without static points: no)
         carried = [(name, kind.removesuffix(_OR_NONE)) for name, kind in _CODECS[typ][1]
                    if not (kind.endswith(_OR_NONE) and isinstance(obj, dict) and obj.get(name) is None)]
-        carried = [(name, kind) for name, kind in carried if kind in _CODECS and _CODECS[kind][0] in want]
+        carried = [(name, kind) for name, kind in carried if kind in wanted]
         hint = (f" (a {typ} carries a {carried[0][1]}: load it without expect= and take its "
                 f"{' or '.join('.' + name for name, _ in carried)})" if carried else "")
         raise GrayboxFileError(f"{source}: holds a {typ}, expected {' or '.join(w.__name__ for w in want)}{hint}")
