@@ -527,3 +527,27 @@ def test_se_uncertainty_refuses_a_variance_beyond_the_float_range_in_the_users_u
             with pytest.raises(ValueError, match=r"^se_uncertainty: the noise variance σ² and the covariance are in "
                                                  r"output units².*beyond the float range in these units: rescale"):
                 gb.se_uncertainty(model, rec, sp, lambda1=0.5)
+
+
+@pytest.mark.parametrize("ky", [-505, 0])
+def test_pe_uncertainty_of_a_term_passes_through_pins_is_0_in_any_units(ky):
+    # as cls_uncertainty's above: PassesThrough the points on a curve through the origin fixes the constant at 0, and
+    # pe_uncertainty gave it the projection's round-off (a standard deviation 3e-18) and at y × 2^-505 refused "the
+    # variance of the parameter of 1 ... is beyond the float range"
+    u, y = _plant()
+
+    def sds(ky, lam):
+        rec, pts = gb.Record(u, np.ldexp(y, ky)), _qp_points(ky, 0)
+        pt = gb.PassesThrough(pts)
+        member = gb.pe_pareto(_QP_TERMS, rec, pts, lambdas=[lam], constraints=pt).member_model(0)
+        unc = gb.pe_uncertainty(member, rec, pts, lambda1=lam, constraints=pt, static_sigma=np.ldexp(0.01, ky))
+        return unc.cov, np.sqrt(np.diag(unc.cov))
+
+    for lam in (0.5, 1.0):
+        base_cov, base = sds(0, lam)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            cov, far = sds(ky, lam)
+        assert not base_cov[0].any() and not cov[0].any() and not cov[:, 0].any()
+        assert np.all(base[1:] > 0)
+        np.testing.assert_allclose(far, _powers_of_two(base, _QP_TERMS, ky, 0), rtol=1e-6)

@@ -1152,6 +1152,7 @@ def pe_uncertainty(
     G = np.vstack([w1 * np.sqrt(sigma2) * d.R1, w2 * np.sqrt(ss2) * B])  # M = GᵀG
     cov, F = _to_theta(_sandwich(Z, A2, G, "pe_uncertainty", d.N + M), d.s)
     cov, F, A = fc.back(cov, F, A)
+    cov, F = _pinned_zeroed(cov, F, A)  # as cls_uncertainty: what the constraints fix has variance 0 in any units
     _refuse_beyond_float_range(F, st, "pe_uncertainty")
     return ParameterUncertainty(m, cov, level, d.N - (n - r), sigma2, f"PE λ1={lam:.4g}", A, np.zeros((0, 0)), ss2,
                                 cov_factor=F)
