@@ -6,6 +6,7 @@ ln 0. Both now run, as frols does, on y and each input times a power of two (exa
 se_pareto (J_S 0 near y × 1e-170: every member stopped at its start) and se_dsf run so too.
 """
 import warnings
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -551,3 +552,36 @@ def test_pe_uncertainty_of_a_term_passes_through_pins_is_0_in_any_units(ky):
         assert not base_cov[0].any() and not cov[0].any() and not cov[:, 0].any()
         assert np.all(base[1:] > 0)
         np.testing.assert_allclose(far, _powers_of_two(base, _QP_TERMS, ky, 0), rtol=1e-6)
+
+
+def test_an_inactive_bound_stays_inactive_and_a_broken_equality_is_refused_at_large_output_units():
+    # at u + 1000 and y × 2^505 the uncertainty's tolerance 1e-6 ‖z‖ overflowed in numpy's norm (z about 1e154 squared;
+    # 'overflow encountered in dot'): with the tolerance infinite the inactive bound Σy <= 0.99 (θ_y 0.70) counted as
+    # active, the standard deviation of y(k-1) came out 0 and the others 0.6 of ordinary units', and a model 2^505
+    # (1 in ordinary units) off its equality Σ0 = 0 was taken for the estimate; the stationarity check's allowance
+    # ‖A‖ ‖z‖ eps overflowed as well, and a θ off the optimum passed for it
+    u, y = _plant()
+    cb = gb.ClusterBounds({"Σ0": (0.0, 0.0), "Σy": (None, 0.99)})
+    ub, yb = np.array([0.6, 1.0, 1.5, 1.9]) + 1000.0, np.array([0.5, 0.9, 1.4, 1.8])
+
+    def sds(ky):
+        rec, pts = gb.Record(u + 1000.0, np.ldexp(y, ky)), gb.StaticPoints(ub, np.ldexp(yb, ky))
+        fit = gb.cls(_QP_TERMS, rec, constraints=cb).model
+        member = gb.pe_pareto(_QP_TERMS, rec, pts, lambdas=[0.5], constraints=cb).member_model(0)
+        uncs = [gb.cls_uncertainty(fit, rec, constraints=cb),
+                gb.pe_uncertainty(member, rec, pts, lambda1=0.5, constraints=cb)]
+        off = replace(fit, theta=fit.theta + np.ldexp([1.0, 0.0, 0.0, 0.0], ky))
+        with pytest.raises(ValueError, match="does not satisfy"):
+            gb.cls_uncertainty(off, rec, constraints=cb)
+        moved = replace(fit, theta=fit.theta + np.array([0.0, 0.01, 0.0, 0.0]))  # on the constraints, off the optimum
+        with pytest.raises(ValueError, match="not the optimum"):
+            gb.cls_uncertainty(moved, rec, constraints=cb)
+        return [(unc.constraints.shape[0], np.sqrt(np.diag(unc.cov))) for unc in uncs]
+
+    base = sds(0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        far = sds(505)
+    for (n0, b), (n1, f) in zip(base, far):
+        assert n0 == n1 == 1  # Σ0 = 0 only: θ_y is 0.70, far from 0.99
+        np.testing.assert_allclose(f, _powers_of_two(b, _QP_TERMS, 505, 0), rtol=1e-6)

@@ -619,9 +619,10 @@ def _check_stationary(Z: np.ndarray, A: np.ndarray, r: np.ndarray, rest2: float,
     # their squares where the norms and the variances are floats
     g = scaled_norm(U[:, S > rank_tolerance(S[0], rows, S.size)].T @ r) if S.size and S[0] > 0 else 0.0
     whole = float(np.hypot(scaled_norm(r), np.sqrt(rest2)))
-    cancel = 0.0 if z is None else 1e-15 * float(np.linalg.norm(A, 2) * np.linalg.norm(z))
+    # (‖z‖ over a power of two too: numpy's overflowed at z about 1e154, and an infinite allowance passed any θ)
+    cancel = 0.0 if z is None else 1e-15 * float(np.linalg.norm(A, 2) * scaled_norm(z))
     if z_round is not None:
-        cancel += float(np.linalg.norm(np.abs(A) @ z_round))
+        cancel += scaled_norm(np.abs(A) @ z_round)
     if not np.isfinite(g) or g > rtol * whole + 1e-11 * size + cancel:
         raise ValueError(f"{what}: the model's θ is not the optimum of this problem (a fraction "
                          f"{g / max(whole, 1e-300):.1e} of its residual lies along the directions θ may move); {hint}")
@@ -667,7 +668,8 @@ def _equalities(cons: list[StaticConstraint], ctx, theta: np.ndarray, s: np.ndar
     """
     n = theta.size
     z = theta * s
-    tol = 1e-6 * max(float(np.linalg.norm(z)), 1e-300)
+    znorm = scaled_norm(z)  # over a power of two: numpy's norm of z about 1e154 overflowed, and every row was near
+    tol = 1e-6 * max(znorm, 1e-300)
     Rf = np.linalg.qr(np.asarray(fit, float), mode="r")
     sv = np.linalg.svd(Rf, compute_uv=False)
     whiten = Rf if sv.size == n and sv[0] > 0 and sv[-1] > rank_tolerance(sv[0], rows, n) else None
@@ -696,7 +698,7 @@ def _equalities(cons: list[StaticConstraint], ctx, theta: np.ndarray, s: np.ndar
     # its hyperplane); equalities and inequalities alike (against 1e-6 ‖z‖, at u = 1e4 ± 1 an equality the model
     # missed by 0.3 of outputs of order 1 held); and within what the last digits of a θ mapped to the centred
     # parameters move the row (per row: a bound over all rows counted rows active that were not, at y + 1e6)
-    near = 1e-6 * scale + 1e-15 * float(np.linalg.norm(whiten, 2) * np.linalg.norm(z)) if whiten is not None else tol
+    near = 1e-6 * scale + 1e-15 * float(np.linalg.norm(whiten, 2) * znorm) if whiten is not None else tol
     rows = [np.zeros((0, n))]
     for c in cons:
         r = c.affine(ctx) if affine is None else affine(c)
