@@ -585,3 +585,21 @@ def test_an_inactive_bound_stays_inactive_and_a_broken_equality_is_refused_at_la
     for (n0, b), (n1, f) in zip(base, far):
         assert n0 == n1 == 1  # Σ0 = 0 only: θ_y is 0.70, far from 0.99
         np.testing.assert_allclose(f, _powers_of_two(b, _QP_TERMS, 505, 0), rtol=1e-6)
+
+
+@pytest.mark.parametrize("ky", [60, 300])
+def test_cls_uncertainty_pins_no_term_the_curve_leaves_free_at_large_output_units(ky):
+    # the pinned test of a3825931 scaled each column of the constraint rows by its norm: at y × 2^60 the curve's row
+    # 2^60 θ_y + θ_u = c (its rows in mixed units) left y(k-1)'s entry 2^-60 of its column's, and y(k-1), which the
+    # curve leaves free (standard deviation 0.0033 in any units), was given variance 0
+    u, y = _plant()
+    terms = ["y(k-1)", "u(k-1)", "u(k-1)^2", "1"]
+    ub, yb = np.array([0.6, 1.0, 1.5, 1.9]), np.array([0.5, 0.9, 1.4, 1.8])
+
+    def sds(ky):
+        rec, pts = gb.Record(u, np.ldexp(y, ky)), gb.StaticPoints(ub, np.ldexp(yb, ky))
+        return np.sqrt(np.diag(gb.cls_uncertainty(gb.cls(terms, rec, pts).model, rec, pts).cov))
+
+    base = sds(0)
+    assert np.all(base[[0, 1, 3]] > 0)  # u(k-1)^2's is 0: the points lie on a line, and the curve's u² row pins it
+    np.testing.assert_allclose(sds(ky), _powers_of_two(base, terms, ky, 0), rtol=1e-6)

@@ -553,23 +553,25 @@ def _factor_cov(F: np.ndarray) -> np.ndarray:
         return np.ldexp(Fs.T @ Fs, e[:, None] + e[None, :])
 
 
-def _pinned_zeroed(cov: np.ndarray, F: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The covariance and its factor with the parameters the equality ``rows`` (θ's coordinates) fix exactly set to
-    variance 0: e_j in the rows' row space, judged on the rows with each column over the power of two of its norm
-    (exact; membership is unchanged by scaling a column, so the verdict is the same in any units). Their variance is
-    otherwise the projection's round-off (a standard deviation 1e-15 of the others'), which at y × 2^-505 fell below
-    the float range and was refused as a variance no float could hold."""
+def _pinned_zeroed(cov: np.ndarray, F: np.ndarray, Z: np.ndarray, s: np.ndarray,
+                   fc: "_FitCoordinates") -> tuple[np.ndarray, np.ndarray]:
+    """The covariance and its factor (in θ) with the parameters the constraints fix exactly set to variance 0. θ_j is
+    fixed where its functional in the fit's coordinates z (θ = A (z / s) + t, A the centring map of ``fc``, the
+    identity without) is orthogonal to the directions Z the constraints leave z free: the cosine between them at
+    most 1e-9. Judged in z, where every column is in output units (the rows the estimator's null space came from),
+    it is the same in any units; their variance is otherwise the projection's round-off (a standard deviation 1e-15
+    of the others'), which at y × 2^-505 fell below the float range and was refused as no float. On the raw rows with
+    each column over its norm the verdict moved with the units: at y × 2^60 a curve's row 2^60 θ_y + θ_u = c left
+    y(k-1)'s entry 2^-60 of its column's, and y(k-1), free, was given variance 0."""
     n = F.shape[1]
-    if rows.shape[0] == 0:
-        return cov, F
-    norms = scaled_norms(rows, axis=0)
-    cols = norms > 0
-    if not cols.any():
-        return cov, F
-    scaled = np.zeros_like(rows, dtype=float)
-    scaled[:, cols] = np.ldexp(rows[:, cols], -binary_exponent(norms[cols]))
-    Z, _ = _null_space(scaled, n)
-    pinned = cols & (np.linalg.norm(Z, axis=1) <= 1e-9)
+    if Z.shape[1] == n:
+        return cov, F  # nothing constrained
+    V = (fc.d.A if fc.centred else np.eye(n)) / s[None, :]  # row j: θ_j as a functional of z
+    norms = scaled_norms(V, axis=1)
+    ok = norms > 0
+    V[ok] = np.ldexp(V[ok], -binary_exponent(norms[ok])[:, None])  # rows over a power of two of their norms (exact)
+    cosine = scaled_norms(V @ Z, axis=1) / np.where(ok, scaled_norms(V, axis=1), 1.0)
+    pinned = ok & (cosine <= 1e-9)
     if not pinned.any():
         return cov, F
     cov, F = np.array(cov, float), np.array(F, float)
@@ -1047,7 +1049,7 @@ def cls_uncertainty(
                       "pass the CLS estimate with the data, static information and constraints it was estimated with",
                       d.N, z=z, z_round=None if fc.round is None else fc.round * d.s)
     cov, F, A = fc.back(cov, F, A)
-    cov, F = _pinned_zeroed(cov, F, A)  # the constraints fix them: variance 0 in any units, not round-off
+    cov, F = _pinned_zeroed(cov, F, Z, d.s, fc)  # the constraints fix them: variance 0 in any units, not round-off
     _refuse_beyond_float_range(F, st, "cls_uncertainty")
     return ParameterUncertainty(model, cov, level, dof, sigma2, "CLS", A, np.zeros((0, 0)), cov_factor=F)
 
@@ -1154,7 +1156,7 @@ def pe_uncertainty(
     G = np.vstack([w1 * np.sqrt(sigma2) * d.R1, w2 * np.sqrt(ss2) * B])  # M = GᵀG
     cov, F = _to_theta(_sandwich(Z, A2, G, "pe_uncertainty", d.N + M), d.s)
     cov, F, A = fc.back(cov, F, A)
-    cov, F = _pinned_zeroed(cov, F, A)  # as cls_uncertainty: what the constraints fix has variance 0 in any units
+    cov, F = _pinned_zeroed(cov, F, Z, d.s, fc)  # as cls_uncertainty: what the constraints fix has variance 0
     _refuse_beyond_float_range(F, st, "pe_uncertainty")
     return ParameterUncertainty(m, cov, level, d.N - (n - r), sigma2, f"PE λ1={lam:.4g}", A, np.zeros((0, 0)), ss2,
                                 cov_factor=F)
