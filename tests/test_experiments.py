@@ -862,3 +862,36 @@ def test_candidates_mark_only_the_chosen_member_not_a_neighbour_of_close_lambda(
     assert old["chosen"].tolist() == [False, True, False]
     marked = {**members, "chosen": np.array([1.0, 0.0, 0.0])}  # the index wins over λ
     assert _candidates(pd.DataFrame([{**row, "members": marked}]))["chosen"].tolist() == [True, False, False]
+
+
+def test_ctrl_c_inside_a_compiled_kernel_stops_an_in_process_grid_and_stores_no_failed_cell(tmp_path, monkeypatch):
+    # Ctrl-C while an in-process `graybox grid run` was inside a numba kernel (se-ga's _batch_sse) reached the cell
+    # as SystemError("CPUDispatcher(...) returned a result with an exception set"), caused by the KeyboardInterrupt:
+    # run_cell stored the cell as failed and the grid went on to its end (exit 0), so the user's Ctrl-C was lost
+    # and the next run skipped that cell unless --retry-failed. This is the chain numba 0.6x gives a real SIGINT.
+    from graybox.experiments import _cell
+
+    g = gx.Grid(name="ctrl-c", data=[gx.DataSpec("pumping", bundled="pumping")],
+                structures=[gx.StructureSpec("first-order", terms=["y(k-1)", "u(k-1)", "u(k-1)y(k-1)", "1"])],
+                variants=[gx.Variant("LS", "ls"), gx.Variant("ELS", "els", options={"noise": 1})])
+    estimate = _cell._estimate
+
+    def interrupted(cell, st, data):
+        if cell.variant == "ELS":
+            try:
+                raise KeyboardInterrupt
+            except KeyboardInterrupt as exc:
+                inner = SystemError("<function _numba_unpickle> returned a result with an exception set")
+                inner.__cause__ = exc
+                raise SystemError("CPUDispatcher(<function _batch_sse>) returned a result with an exception "
+                                  "set") from inner
+        return estimate(cell, st, data)
+
+    monkeypatch.setattr(_cell, "_estimate", interrupted)
+    path = tmp_path / "s.sqlite"
+    with pytest.raises(KeyboardInterrupt):
+        gx.run_grid(g, path)
+    assert set(gx.load_results(path)["status"]) <= {"ok"}  # the interrupted cell is not stored as failed
+    monkeypatch.setattr(_cell, "_estimate", estimate)
+    run = gx.run_grid(g, path)  # the same command runs the cell Ctrl-C stopped
+    assert dict(run.counts)["ok"] == 2 and dict(run.counts)["failed"] == 0
