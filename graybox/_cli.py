@@ -261,6 +261,7 @@ def _main(argv: list[str] | None) -> int:
                           "one); the tables keep every structure")
     args = parser.parse_args(argv)
     if args.command == "reproduce":
+        from .core._processes import interrupted_by_user
         from .estimation._simulation_error import CheckpointError
         from .reproduce import run as reproduce
 
@@ -270,15 +271,18 @@ def _main(argv: list[str] | None) -> int:
             print(f"graybox reproduce: {exc}; or run with --fresh, which starts every sweep of this mode over",
                   file=sys.stderr)
             return 2
-        except KeyboardInterrupt:  # Ctrl-C: the sweeps checkpointed what they finished
-            print(f"graybox reproduce: interrupted; the checkpoints in {args.out} are kept, and the same command "
-                  "resumes from them", file=sys.stderr)
-            return 130
         except BrokenPipeError:
             raise
         except OSError as exc:  # --out unusable, a disk full: the environment's, not a bug to trace back
             print(f"graybox reproduce: {exc}", file=sys.stderr)
             return 2
+        except BaseException as exc:  # Ctrl-C, also inside a numba kernel (a SystemError it caused)
+            if not interrupted_by_user(exc):
+                raise
+            # the sweeps checkpointed what they finished
+            print(f"graybox reproduce: interrupted; the checkpoints in {args.out} are kept, and the same command "
+                  "resumes from them", file=sys.stderr)
+            return 130
         return 0
     return _grid(args)
 

@@ -878,13 +878,8 @@ def test_ctrl_c_inside_a_compiled_kernel_stops_an_in_process_grid_and_stores_no_
 
     def interrupted(cell, st, data):
         if cell.variant == "ELS":
-            try:
-                raise KeyboardInterrupt
-            except KeyboardInterrupt as exc:
-                inner = SystemError("<function _numba_unpickle> returned a result with an exception set")
-                inner.__cause__ = exc
-                raise SystemError("CPUDispatcher(<function _batch_sse>) returned a result with an exception "
-                                  "set") from inner
+            raise SystemError("CPUDispatcher(<function _batch_sse>) returned a result with an exception set") \
+                from _kernel_interrupt()
         return estimate(cell, st, data)
 
     monkeypatch.setattr(_cell, "_estimate", interrupted)
@@ -895,3 +890,39 @@ def test_ctrl_c_inside_a_compiled_kernel_stops_an_in_process_grid_and_stores_no_
     monkeypatch.setattr(_cell, "_estimate", estimate)
     run = gx.run_grid(g, path)  # the same command runs the cell Ctrl-C stopped
     assert dict(run.counts)["ok"] == 2 and dict(run.counts)["failed"] == 0
+
+
+def _kernel_interrupt() -> SystemError:
+    """What Ctrl-C inside a numba kernel raises (seen under a real SIGINT): SystemError caused by the interrupt."""
+    try:
+        raise KeyboardInterrupt
+    except KeyboardInterrupt as exc:
+        err = SystemError("CPUDispatcher(<function _batch_sse_parallel>) returned a result with an exception set")
+        err.__cause__ = exc
+        return err
+
+
+def test_ctrl_c_inside_a_compiled_kernel_during_reproduce_says_what_is_kept(tmp_path, monkeypatch, capsys):
+    # Ctrl-C 15 s into `graybox reproduce --quick` (the GA of Table I in _batch_sse_parallel) printed a SystemError
+    # traceback ("returned a result with an exception set") and exited 1, not "interrupted; the checkpoints in
+    # ... are kept" and 130 as a Ctrl-C elsewhere does
+    import graybox.reproduce as rp
+
+    def section(quick, out):
+        raise _kernel_interrupt()
+
+    monkeypatch.setattr(rp, "SECTIONS", (section,))
+    assert main(["reproduce", "--quick", "--out", str(tmp_path)]) == 130
+    err = capsys.readouterr().err
+    assert err.startswith("graybox reproduce: interrupted") and str(tmp_path) in err
+
+
+def test_a_systemerror_not_caused_by_ctrl_c_still_surfaces_from_reproduce(tmp_path, monkeypatch):
+    import graybox.reproduce as rp
+
+    def section(quick, out):
+        raise SystemError("a real bug")
+
+    monkeypatch.setattr(rp, "SECTIONS", (section,))
+    with pytest.raises(SystemError, match="a real bug"):
+        main(["reproduce", "--quick", "--out", str(tmp_path)])

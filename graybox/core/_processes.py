@@ -1,4 +1,4 @@
-"""Processes of this host: whether one still runs, asked by its pid.
+"""Processes of this host: whether one still runs, asked by its pid; whether Ctrl-C stopped this one.
 
 Files a process leaves beside a store or a checkpoint (its claim, its half-written file) are judged by whether
 their writer still runs; the store's drivers and the checkpoints' writers ask it the same way.
@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import os
 
-__all__ = ["pid_alive", "pid_started"]
+__all__ = ["interrupted_by_user", "pid_alive", "pid_started"]
 
 
 def pid_alive(pid: int) -> bool:
@@ -50,3 +50,20 @@ def _stat_fields(pid: int) -> list[bytes] | None:
             return f.read().rsplit(b")", 1)[1].split()
     except (OSError, IndexError):
         return None
+
+
+def interrupted_by_user(exc: BaseException) -> bool:
+    """Whether ``exc`` is, or was caused by, a KeyboardInterrupt (Ctrl-C).
+
+    Ctrl-C while a numba kernel runs reaches Python as ``SystemError("CPUDispatcher(...) returned a result with an
+    exception set")`` whose cause is the KeyboardInterrupt: whoever catches Exception (a grid cell's failure, the
+    command's messages) asks this to tell the user's interrupt from a failure.
+    """
+    seen: set[int] = set()
+    cur: BaseException | None = exc
+    while cur is not None and id(cur) not in seen:
+        if isinstance(cur, KeyboardInterrupt):
+            return True
+        seen.add(id(cur))
+        cur = cur.__cause__ or cur.__context__
+    return False

@@ -25,6 +25,7 @@ from .. import _api as gb
 from ..static._constraints import static_cluster_map
 from ..estimation._decisions import min_jsf_index
 from ..estimation._prediction_error import numerator_surface
+from ..core._processes import interrupted_by_user
 from ..core._least_squares import binary_exponent, scaled_theta, thread_pools
 from ..core._validation import check_int
 from ..models._evaluate import fit_or_nan, output_spread
@@ -267,18 +268,6 @@ def warning_texts(caught: Iterable[warnings.WarningMessage]) -> list[str]:
     return sorted({f"{w.category.__name__}: {w.message}" for w in caught})
 
 
-def _interrupt_in(exc: BaseException) -> bool:
-    """Whether a KeyboardInterrupt caused ``exc``: Ctrl-C inside a numba kernel reaches Python as SystemError
-    ("CPUDispatcher(...) returned a result with an exception set") whose cause is the KeyboardInterrupt."""
-    seen: set[int] = set()
-    while exc is not None and id(exc) not in seen:
-        if isinstance(exc, KeyboardInterrupt):
-            return True
-        seen.add(id(exc))
-        exc = exc.__cause__ or exc.__context__
-    return False
-
-
 def run_cell(cell: Cell, data: gb.Dataset, *, threads: int = 1) -> dict[str, Any]:
     """Run one cell and return its row (see :data:`COLUMNS`); never raises for the cell's own problems.
 
@@ -331,7 +320,7 @@ def run_cell(cell: Cell, data: gb.Dataset, *, threads: int = 1) -> dict[str, Any
     except gb.DivergenceError as exc:
         row.update(status="diverged", message=str(exc))
     except Exception as exc:  # a cell's failure is data, not a crash of the grid
-        if _interrupt_in(exc):  # Ctrl-C, not the cell's failure: the grid stops and the cell stays to run
+        if interrupted_by_user(exc):  # Ctrl-C, not the cell's failure: the grid stops and the cell stays to run
             raise KeyboardInterrupt from exc
         row.update(status="failed", message=f"{type(exc).__name__}: {exc}")
     finally:
