@@ -926,3 +926,14 @@ def test_a_systemerror_not_caused_by_ctrl_c_still_surfaces_from_reproduce(tmp_pa
     monkeypatch.setattr(rp, "SECTIONS", (section,))
     with pytest.raises(SystemError, match="a real bug"):
         main(["reproduce", "--quick", "--out", str(tmp_path)])
+
+
+def test_a_store_and_its_hard_link_are_not_compared_as_two_stores(small_store, tmp_path):
+    # `graybox grid report a.sqlite b.sqlite` with b a hard link of a (ln a.sqlite b.sqlite: one file, two names)
+    # wrote a comparison of the store with itself, every row twice; a symbolic link was refused as the same store
+    import os
+
+    path, _ = small_store
+    os.link(path, tmp_path / "link.sqlite")
+    with pytest.raises(ValueError, match="same store"):
+        gx.compare_results([path, tmp_path / "link.sqlite"])

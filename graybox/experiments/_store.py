@@ -1317,9 +1317,13 @@ def compare_results(
     paths = [Path(s) for s in stores]
     if len(paths) < 2:
         raise ValueError(f"compare_results needs two or more stores, got {len(paths)}")
-    seen_at: dict[Path, Path] = {}
+    seen_at: dict[object, Path] = {}
     for p in paths:  # a store named twice (a typo, a link) would be compared with itself, every row twice
-        at = p.resolve()
+        try:  # one file under two names (a hard link) has one device and inode; a missing one is refused below
+            st = os.stat(p)
+            at: object = (st.st_dev, st.st_ino)
+        except OSError:
+            at = p.resolve()
         if at in seen_at:
             raise ValueError(f"{seen_at[at]} and {p} are the same store: compare two or more different stores")
         seen_at[at] = p
