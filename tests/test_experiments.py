@@ -937,3 +937,16 @@ def test_a_store_and_its_hard_link_are_not_compared_as_two_stores(small_store, t
     os.link(path, tmp_path / "link.sqlite")
     with pytest.raises(ValueError, match="same store"):
         gx.compare_results([path, tmp_path / "link.sqlite"])
+
+
+def test_a_json_spec_is_told_to_be_json_not_invalid_toml(tmp_path, capsys):
+    # `graybox grid run spec.json --store s.sqlite` (the grid's tables written by json.dump) said only "invalid
+    # TOML: Invalid statement (at line 1, column 1)", as for a typo on line 1: it now says the file is JSON
+    import json
+
+    spec = tmp_path / "spec.json"
+    spec.write_text(json.dumps({"name": "t", "data": [{"name": "pumping", "bundled": "pumping"}]}), encoding="utf-8")
+    assert main(["grid", "run", str(spec), "--store", str(tmp_path / "s.sqlite")]) == 2
+    err = capsys.readouterr().err
+    assert "JSON" in err and "TOML" in err and "Traceback" not in err
+    assert not (tmp_path / "s.sqlite").exists()

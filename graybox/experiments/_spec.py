@@ -1407,6 +1407,10 @@ class Grid:
         try:
             d = tomllib.loads(text)
         except tomllib.TOMLDecodeError as exc:
+            if text.lstrip().startswith("{"):  # no TOML text starts so: JSON (json.dump of the grid's tables)
+                raise SpecError("invalid TOML: it is JSON (it starts with '{'); a spec is TOML (graybox grid init "
+                                "prints one); from Python, Grid.from_dict(json.load(file)) reads the same tables",
+                                source=source, line=1) from None
             at = re.search(r"at line (\d+)", str(exc))
             raise SpecError(f"invalid TOML: {exc}", source=source, line=int(at.group(1)) if at else None) from None
         lines = _TomlLines(text)
