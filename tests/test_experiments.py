@@ -950,3 +950,16 @@ def test_a_json_spec_is_told_to_be_json_not_invalid_toml(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "JSON" in err and "TOML" in err and "Traceback" not in err
     assert not (tmp_path / "s.sqlite").exists()
+
+
+def test_worker_timeout_without_dask_names_the_options_that_take_it(tmp_path, capsys):
+    # `graybox grid run spec.toml --store s.sqlite --worker-timeout 5` said "the 'inprocess' executor has none to
+    # lose": an executor name the command has no option for, and not which options give a Dask run
+    spec = tmp_path / "spec.toml"
+    spec.write_text(TOML, encoding="utf-8")
+    for extra in ([], ["--processes", "1"]):
+        assert main(["grid", "run", str(spec), "--store", str(tmp_path / "s.sqlite"), "--worker-timeout", "5",
+                     *extra]) == 2
+        err = capsys.readouterr().err
+        assert "--worker-timeout" in err and "--workers N or --scheduler ADDRESS" in err and "inprocess" not in err
+    assert not (tmp_path / "s.sqlite").exists()

@@ -1179,7 +1179,10 @@ def make_executor(executor: str | None = None, *, workers: int | None = None, cl
     if worker_timeout is not None:
         worker_timeout = check_real(worker_timeout, "worker_timeout (seconds)", low=0, low_open=True)
     if worker_timeout != WORKER_TIMEOUT and executor != "dask":
-        raise ValueError(f"worker_timeout is for a Dask cluster's workers; the {executor!r} executor has none to lose")
+        where = "local worker processes" if executor == "processes" else "the driver alone"
+        raise ValueError(f"worker_timeout is for a Dask cluster's workers (executor='dask'; graybox grid run "
+                         f"--worker-timeout S with --workers N or --scheduler ADDRESS); a run on {where} has none to "
+                         "lose")
     if executor == "inprocess":
         if any(v is not None for v in (workers, client, scheduler)):
             raise ValueError("the in-process executor takes no workers, client or scheduler")
