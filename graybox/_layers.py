@@ -15,7 +15,7 @@ from __future__ import annotations
 LAYERS: tuple[tuple[str, tuple[str, ...], str], ...] = (
     ("_layers", (), "this order"),
     ("_lazy", (), "the lazy re-export of public names (``import graybox`` loads no heavy dependency)"),
-    ("core", ("_version", "_renamed", "_reprs", "_validation", "_progress", "_terms", "_equation_text", "_records", "_transient", "_processes", "_files", "_regressors",
+    ("core", ("_jit", "_version", "_renamed", "_reprs", "_validation", "_progress", "_terms", "_equation_text", "_records", "_transient", "_processes", "_files", "_regressors",
               "_simulation_kernels", "_gram", "_least_squares", "_simulation"),
      "terms and structures, records and data sets, argument checks, regressors, compiled free runs, "
      "Gram matrices and long records, scaled least squares"),

@@ -1,35 +1,42 @@
-"""Every compiled kernel is cached on disk (issue 25): a new process loads it instead of compiling."""
+"""An install nobody may write to, run without a usable HOME: numba finds no cache folder (graybox/core/_jit.py)."""
 
 from __future__ import annotations
 
-import ast
+import os
+import shutil
+import subprocess
+import sys
 from pathlib import Path
 
-PACKAGE = Path(__file__).resolve().parents[1] / "graybox"
-_COMPILERS = {"njit", "jit", "vectorize", "guvectorize", "cfunc", "generated_jit"}
+import graybox
+
+_PROBE = ("import graybox.core._simulation_kernels, graybox.static._equilibrium_kernels, numba; "
+          "print(numba.config.CACHE_DIR)")
 
 
-def _compiled_functions():
-    for path in sorted(PACKAGE.rglob("*.py")):
-        text = path.read_text(encoding="utf-8")
-        if not any(name in text for name in _COMPILERS):  # a decorator's name is in its file's text: no need to parse
-            continue
-        for node in ast.walk(ast.parse(text)):
-            if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
-                continue
-            for deco in node.decorator_list:
-                call = deco if isinstance(deco, ast.Call) else None
-                target = call.func if call else deco
-                name = target.attr if isinstance(target, ast.Attribute) else getattr(target, "id", "")
-                if name in _COMPILERS:
-                    yield f"{path.relative_to(PACKAGE.parent)}:{node.lineno} {node.name}", call
+def _unwritable_copy(tmp_path: Path) -> dict:
+    """graybox copied with a file where each ``__pycache__`` folder would go (nothing can be cached beside it, even
+    for root), HOME a file (no user-wide folder): the environment to run it in."""
+    root = tmp_path / "site"
+    shutil.copytree(Path(graybox.__file__).parent, root / "graybox", ignore=shutil.ignore_patterns("__pycache__"))
+    for folder in [p for p in (root / "graybox").rglob("*") if p.is_dir()] + [root / "graybox"]:
+        (folder / "__pycache__").write_text("")
+    home = tmp_path / "home-is-a-file"
+    home.write_text("")
+    env = {k: v for k, v in os.environ.items() if k not in ("XDG_CACHE_HOME", "NUMBA_CACHE_DIR", "PYTHONPATH")}
+    env.update(HOME=str(home), PYTHONPATH=str(root), PYTHONDONTWRITEBYTECODE="1", TMPDIR=str(tmp_path))
+    return env
 
 
-def test_every_numba_kernel_is_cached():
-    found = list(_compiled_functions())
-    assert len(found) > 30  # the kernels are where they were looked for
-    uncached = [where for where, call in found
-                if call is None or not any(k.arg == "cache" and isinstance(k.value, ast.Constant) and k.value.value is True
-                                           for k in call.keywords)]
-    assert not uncached, f"compiled without cache=True (each new process would compile them again): {uncached}"
-
+def test_kernels_cache_in_the_temporary_folder_where_numba_finds_none(tmp_path):
+    # was: RuntimeError: cannot cache function '_input_products': no locator available, on `import` of any kernel
+    env = _unwritable_copy(tmp_path)
+    run = subprocess.run([sys.executable, "-c", _PROBE], env=env, cwd=tmp_path, capture_output=True, text=True,
+                         timeout=120)
+    assert run.returncode == 0, run.stderr
+    assert Path(run.stdout.strip()).parent == tmp_path and "graybox-numba-cache" in run.stdout
+    # the user's own NUMBA_CACHE_DIR is kept
+    own = tmp_path / "mine"
+    run = subprocess.run([sys.executable, "-c", _PROBE], env={**env, "NUMBA_CACHE_DIR": str(own)}, cwd=tmp_path,
+                         capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0 and run.stdout.strip() == str(own), run.stderr

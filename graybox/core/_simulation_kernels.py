@@ -27,7 +27,7 @@ import math
 from functools import lru_cache
 from typing import NamedTuple
 
-import numba as nb
+from ._jit import nb
 import numpy as np
 
 from ._terms import Structure, require_inputs

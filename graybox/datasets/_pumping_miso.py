@@ -64,7 +64,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Sequence
 
-import numba as nb
+from ..core._jit import nb
 import numpy as np
 
 from ..core._records import Record, StaticPoints, frame_inputs

@@ -197,7 +197,7 @@ from pathlib import Path
 from functools import cached_property
 from typing import Callable, Sequence
 
-import numba as nb
+from ..core._jit import nb
 import numpy as np
 
 from ..core._files import write_atomically

@@ -124,7 +124,7 @@ import time
 from dataclasses import dataclass
 from typing import Literal, Sequence
 
-import numba as nb
+from ..core._jit import nb
 import numpy as np
 
 from ..core._least_squares import output_spread

@@ -50,7 +50,7 @@ import warnings
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Literal, Mapping, Sequence
 
-import numba as nb
+from ..core._jit import nb
 import numpy as np
 
 from ..models._model import Model, model_input_names

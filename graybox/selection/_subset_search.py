@@ -30,7 +30,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable, Sequence
 
-import numba as nb
+from ..core._jit import nb
 import numpy as np
 
 from ._stopping import FewerTermsError, StopRule

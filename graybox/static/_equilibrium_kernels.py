@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
+from ..core._jit import nb
 import numpy as np
 
 __all__ = [
