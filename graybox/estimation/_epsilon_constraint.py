@@ -41,13 +41,11 @@ from ._decisions import resolve_band
 from ._local_models import check_margin
 from ..models._coerce import as_structure, records_of, static_points
 from ..models._model import Model
-from ..core._least_squares import (binary_scaled, one_blas_thread, refuse_beyond_float_range, scaled_points,
-                                   scaled_theta, unscaled_theta)
-from ..core._regressors import stacked_regressors
+from ..core._least_squares import one_blas_thread, refuse_beyond_float_range, scaled_theta, unscaled_rss, unscaled_theta
 from ..core._reprs import beside, bound_text
 from ..core._records import Dataset, Record, StaticPoints, carried_from, warn_static_range
 from ._simulation_error import (SEProblem, _Failed, _multistart, _pe_members, _pe_starts, _pull_inside,
-                                gradient_front, refit_if_slow)
+                                free_run_scaled, gradient_front, refit_if_slow)
 from ..core._terms import Structure
 from ..static._curves import StaticCurve
 from ..static._surfaces import StaticSurface
@@ -506,15 +504,11 @@ def se_dsf(
     pe_lambdas = None if pe_lambdas is None else check_lambdas(pe_lambdas, "pe_lambdas")
     margin = check_margin(margin)
     st = as_structure(structure)
-    # solved on y and each input times a power of two where J_S's squares (or a term's products) would leave the
-    # float range, as se_pareto and output_error are: at y near 1e-170 δ² and every J underflowed to 0, near 1e157
-    # they overflowed; the model and the J's are mapped back to the data's units
-    fit_recs, exps = binary_scaled(recs, st)
-    fit_recs, fit_sp = list(fit_recs), sp if not exps else scaled_points(sp, exps)
-    if exps:
-        stacked_regressors(st, recs)  # a term whose column is no float in the data's own units is refused by name
-        if theta0 is not None:
-            theta0 = scaled_theta(check_theta(len(st), theta0, "theta0"), st, exps)
+    # solved on scaled signals as se_pareto is (at y near 1e-170 δ² and every J underflowed to 0, near 1e157 they
+    # overflowed); the model and the J's are mapped back to the data's units
+    fit_recs, fit_sp, exps = free_run_scaled(recs, sp, st)
+    if exps and theta0 is not None:
+        theta0 = scaled_theta(check_theta(len(st), theta0, "theta0"), st, exps)
     fit_band = resolve_band(None, fit_sp, "se_dsf")[1] if not given_band else band if not exps else float(
         np.ldexp(band, -2 * exps["y"]))
     problem = SEProblem(st, fit_recs, fit_sp, margin=None if margin == "auto" else margin)
@@ -539,9 +533,7 @@ def _unscaled(res: DSFResult, exps: dict[str, int], recs: list[Record], sp: Stat
     st = res.model.structure
     theta = unscaled_theta(res.model.theta, list(st), exps)
     refuse_beyond_float_range(st.terms, theta, prefix="se_dsf: the model cannot be used on these data: ")
-    with np.errstate(over="ignore", under="ignore"):
-        own = {k: float(np.ldexp(getattr(res, k), 2 * exps["y"])) for k in ("JS", "JSF", "band", "start_JS",
-                                                                            "start_JSF")}
+    own = {k: float(unscaled_rss(getattr(res, k), exps)) for k in ("JS", "JSF", "band", "start_JS", "start_JSF")}
     return replace(res, model=Model(st, theta, name=res.model.name, **carried_from(recs, sp)), **own)
 
 

@@ -43,12 +43,11 @@ from typing import Literal, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from ..core._least_squares import (binary_scaled, one_blas_thread, refuse_beyond_float_range, scaled_records,
-                                   scaled_theta, unscaled_theta)
+from ..core._least_squares import (one_blas_thread, refuse_beyond_float_range, scaled_records, scaled_theta,
+                                   unscaled_rss, unscaled_theta)
 from ..core._progress import progress_bar
 from ..core._records import (Dataset, Record, as_records, carried_from, check_alike, check_overlap, choosing_records,
                              same_record)
-from ..core._regressors import stacked_regressors
 from ..core._terms import Structure
 from ..core._validation import (Relocked, FrozenFrame, FrozenMap, check_bool, check_choice, check_fields, check_int,
                                 check_margin_value, check_mean_square, check_real, check_seed, check_str, check_theta)
@@ -57,7 +56,7 @@ from ..models._model import Model
 from ._extended_least_squares import ELSConvergenceWarning, els
 from ._local_models import check_margin
 from ._simulation_error import (_SOLVERS, SEProblem, _fit, _pull_inside, _why_infeasible, check_lsq_tol,
-                                refit_if_slow)
+                                free_run_scaled, refit_if_slow)
 
 __all__ = ["OEResult", "output_error"]
 
@@ -239,13 +238,10 @@ def output_error(
             for r in given:
                 check_overlap(c, r, "choosing", "fitting", "choose on data the fit did not see (e.g. data.valid)",
                               prefix="choose_on: ")
-    # fitted on y and each input times a power of two where J_S's squares (or a term's products) would leave the
-    # float range, as frols, semp and els are: at y near 1e-157 every start failed on NaNs, near 1e-170 J_S was 0 and
-    # the fits stopped at their starts, near 1e157 every start "diverged". The choosing records take the same powers
-    rec, exps = binary_scaled(given, st)
-    rec, crec = list(rec), scaled_records(crec, exps)
-    if exps:  # but a term whose column is no float in the data's own units is refused by name, as els refuses it
-        stacked_regressors(st, given)
+    # fitted on scaled signals where J_S would leave the float range (at y near 1e-157 every start failed on NaNs);
+    # the choosing records take the same powers
+    rec, _, exps = free_run_scaled(given, None, st)
+    crec = scaled_records(crec, exps)
     if exps and theta0 is not None:
         theta0 = scaled_theta(theta0, st, exps)
     problem = SEProblem(st, rec, None, margin=None if margin == "auto" else margin, ridge=ridge)
@@ -272,15 +268,12 @@ def _unscaled(res: OEResult, exps: dict[str, int], given: list[Record]) -> OERes
     theta = unscaled_theta(res.model.theta, list(st), exps)
     refuse_beyond_float_range(st.terms, theta, prefix="output_error: the estimate cannot be used on these data: ")
 
-    def own(ms):
-        with np.errstate(over="ignore", under="ignore"):
-            return np.ldexp(np.asarray(ms, dtype=float), 2 * exps["y"])
-
     starts = res.starts.copy()
     for c in ("JS_start", "JS", "JS_choose"):
-        starts[c] = own(starts[c].to_numpy(float))
-    return replace(res, model=Model(st, theta, name=res.model.name, **carried_from(given)), JS=float(own(res.JS)),
-                   JS_choose=float(own(res.JS_choose)), starts=starts)
+        starts[c] = unscaled_rss(starts[c].to_numpy(float), exps)
+    return replace(res, model=Model(st, theta, name=res.model.name, **carried_from(given)),
+                   JS=float(unscaled_rss(res.JS, exps)), JS_choose=float(unscaled_rss(res.JS_choose, exps)),
+                   starts=starts)
 
 
 def _oe_fit(problem: SEProblem, rec: list[Record], *, n_starts, subsample, theta0, chooser, chosen_on, seed, max_nfev,

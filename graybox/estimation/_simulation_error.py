@@ -67,7 +67,7 @@ from ..core._simulation_kernels import (
 )
 from ..core._least_squares import (binary_scaled, check_rows, column_scales, one_blas_thread, output_scale,
                                    refuse_beyond_float_range, refuse_parameter_scales, scaled_lstsq, scaled_points,
-                                   scaled_theta, unscaled_theta)
+                                   scaled_theta, unscaled_rss, unscaled_theta)
 from ..models._coerce import as_structure, records_of, static_points
 from ._pareto import ParetoSet
 from ..core._progress import progress_bar
@@ -1302,6 +1302,20 @@ def _triangle(A: np.ndarray, overwrite: bool = False) -> np.ndarray:
     return np.triu(qr[: min(A.shape)])
 
 
+def free_run_scaled(records: list[Record], points: StaticPoints | None,
+                    structure: Structure) -> tuple[list[Record], StaticPoints | None, dict[str, int]]:
+    """The records and static points a free-run fit runs on: y and each input times a power of two where J_S's
+    squares (or a term's products) would leave the float range (:func:`~graybox.core._least_squares.binary_scaled`;
+    the exponents, empty where the data's own units serve), the points alike. A term whose column is no float in the
+    data's own units is refused by name, as els refuses it. At y near 1e-170 J_S underflowed to 0 and every fit
+    stopped at its start; near 1e157 every start's free run read as diverging."""
+    fit, exps = binary_scaled(records, structure)
+    if not exps:
+        return list(fit), points, exps
+    stacked_regressors(structure, records)
+    return list(fit), None if points is None else scaled_points(points, exps), exps
+
+
 class _Start:
     """The residuals and the factor of :func:`_r_factor` at one start z0 of a fit at λ1, each computed once: the
     start's feasibility check and every solver fitted from it (:func:`_multistart`) evaluate z0 first, and the
@@ -1914,13 +1928,9 @@ def se_pareto(
     st = as_structure(structure)
     if isinstance(theta0, str) and theta0 != "ls":
         raise ValueError(f"theta0 must be an array, 'ls' or None, got {theta0!r}")
-    # fitted on y and each input times a power of two where J_S's squares (or a term's products) would leave the
-    # float range, as output_error is: at y near 1e-170 J_S underflowed to 0 and every member stopped at its start,
-    # near 1e157 every start's free run read as diverging. θ and the J's are mapped back to the data's units
-    fit_rec, exps = binary_scaled(rec, st)
-    fit_rec, fit_sp = list(fit_rec), sp if not exps else scaled_points(sp, exps)
+    # θ and the J's of the fit on scaled signals are mapped back to the data's units below
+    fit_rec, fit_sp, exps = free_run_scaled(rec, sp, st)
     if exps:
-        stacked_regressors(st, rec)  # a term whose column is no float in the data's own units is refused by name
         if theta0 is not None and not isinstance(theta0, str):
             theta0 = scaled_theta(check_theta(len(st), theta0, "theta0"), st, exps)
         if starts is not None and not isinstance(starts, str):
@@ -1979,8 +1989,7 @@ def se_pareto(
         thetas[fitted] = unscaled_theta(thetas[fitted], list(problem.structure), exps)
         refuse_beyond_float_range(problem.structure.terms, *thetas[fitted],
                                   prefix="se_pareto: a member cannot be used on these data: ")
-        with np.errstate(over="ignore", under="ignore"):  # output units²: inf or 0 beyond the range, as y² there
-            costs = np.ldexp(costs, 2 * exps["y"])
+        costs = unscaled_rss(costs, exps)  # output units²: inf or 0 beyond the range, as y² there
     # the sweep runs from λ1 = 1 down (an internal matter); the set keeps the caller's order of lambdas, as
     # pe_pareto's does: sweep position p holds the caller's member order[p]
     order = np.argsort(-check_lambdas(lam_in), kind="stable")
