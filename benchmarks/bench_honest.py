@@ -83,6 +83,41 @@ def _true_points(bias=0.0):
     return gb.StaticPoints(ub, gb.Model(TRUE, THETA).static_curve(ub) + bias)
 
 
+def _tank_pump(u):
+    """The cascaded tanks' pump: flow (cm³/s per cm² of tank) against its voltage u (V), a dead zone below 1 V."""
+    return 3.2 * np.maximum(u - 1.0, 0.0) ** 1.3
+
+
+def _tanks(seed, n):
+    """A plant no default or study of graybox was tuned on (added 2026-11-29): two cascaded tanks, pump voltage
+    u (V) to the lower tank's level y (cm), Torricelli outflows, sampled every 2 s (Euler steps of 0.1 s), a slow
+    random inflow disturbance and 0.05 cm of level noise; APRBS input in [2, 5] V held 15-59 samples, the run
+    starting at its first level's steady state."""
+    rng = np.random.default_rng(seed)
+    levels = []
+    while len(levels) < n:
+        levels += [rng.uniform(2.0, 5.0)] * int(rng.integers(15, 60))
+    u = np.array(levels[:n])
+    a1, a2, area = 0.45, 0.38, 0.6
+    q = _tank_pump(u[0])
+    h1, h2, d = (q / a1) ** 2, (q / a2) ** 2, 0.0
+    y = np.empty(n)
+    for k in range(n):
+        y[k] = h2
+        for _ in range(20):
+            d = 0.999 * d + 0.01 * rng.standard_normal()
+            h1 += 0.1 / area * (_tank_pump(u[k]) + d - a1 * np.sqrt(max(h1, 0.0)))
+            h2 += 0.1 / area * (a1 * np.sqrt(max(h1, 0.0)) - a2 * np.sqrt(max(h2, 0.0)))
+    return gb.Record(u, y + 0.05 * rng.standard_normal(n), name=f"tanks {seed}", Ts=2.0, units=("V", "cm"))
+
+
+def _tank_points():
+    """The tanks' static test: 9 levels over [1.5, 5.5] V, beyond the records' range, 0.05 cm of noise."""
+    ub = np.linspace(1.5, 5.5, 9)
+    yb = (_tank_pump(ub) / 0.38) ** 2 + 0.05 * np.random.default_rng(0).standard_normal(9)
+    return gb.StaticPoints(ub, yb, units=("V", "cm"))
+
+
 def cases():
     """name -> (Dataset (ident, valid, static), test Record, candidates, band)."""
     from graybox.datasets import pumping
@@ -108,6 +143,8 @@ def cases():
                                gb.Candidates(3, 3, degree=2), 1e-3)
     out["static points off the records"] = (gb.Dataset(_synthetic(7, 1200), _synthetic(8, 600), _true_points(0.15)),
                                             _synthetic(9, 4000), gb.Candidates(3, 3, degree=2), 0.03)
+    out["cascaded tanks"] = (gb.Dataset(_tanks(1, 1200), _tanks(2, 600), _tank_points()), _tanks(3, 1500),
+                             gb.Candidates(3, 3, degree=3), 25.0)
     return out
 
 

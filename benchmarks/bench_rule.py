@@ -1,0 +1,170 @@
+"""The choosing rule of select_graybox against alternatives, on the same scores (issue 26).
+
+    .venv/bin/python benchmarks/bench_rule.py [--cases plant,buck,...] [--tank-draws 3]
+
+Each case of bench_honest (and more draws of its cascaded tanks) runs ``select_graybox`` once for the gray box
+(the case's band) and once for the black box (no band), fit on identification, choose on the validation record's
+blocks, test untouched; the rule's inputs (each row's per-block J_S of its chosen member) are captured and every
+rule below applied to them. Nothing a rule chooses with reads the test record. Rules (eligible rows, then the
+fewest terms, ties by the smaller validation J_S):
+
+- ``log``: the mean per-block log ratio to the best row within its standard error (select_graybox's one-se);
+- ``arith``: the mean per-block difference to the best row's J_S within its standard error (J_S's own scale);
+- ``log+arith``: both;
+- ``ratio``: log(J_S / best J_S) of the whole record within the per-block log ratios' standard error;
+- ``ratio-delta``: the same, the standard error of log(J_S / best J_S) by the delta method over the blocks;
+- ``best's se``: J_S within one standard error of the best row's own J_S over the blocks (Breiman's);
+- ``min``: the smallest validation J_S.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+sys.path.insert(0, str(Path(__file__).parent))
+from _common import git_rev, machine  # noqa: E402
+import bench_honest  # noqa: E402
+
+import graybox as gb  # noqa: E402
+from graybox.experiments import _select as S  # noqa: E402
+
+CAUGHT: list = []
+_table, _choose = S._table, S._choose
+
+
+def _caught_table(rows, jobs, results, plan):
+    out = _table(rows, jobs, results, plan)
+    CAUGHT.append(dict(weights=np.asarray(results[0]["weights"], float)))
+    return out
+
+
+def _caught_choose(table, scores, weights, rule):
+    CAUGHT[-1].update(scores=[np.asarray(s, float) for s in scores], table=table[["estimator", "n_terms",
+                      "JS_valid", "in_band"]].copy())
+    return _choose(table, scores, weights, rule)
+
+
+S._table, S._choose = _caught_table, _caught_choose
+
+
+def eligible(rule: str, B: np.ndarray, w: np.ndarray, ok: np.ndarray) -> np.ndarray:
+    """Eligible rows (bool) among the in-band ``ok`` rows from their (rows, blocks) J_S."""
+    js = B @ w
+    best = int(np.flatnonzero(ok)[np.argmin(js[ok])])
+    n = B.shape[1]
+    with np.errstate(all="ignore"):
+        lr = np.log(B / B[best])
+        log_ok = lr.mean(1) <= np.nan_to_num(lr.std(1, ddof=1) / np.sqrt(n))
+        d = B - B[best]
+        arith_ok = d @ w <= np.nan_to_num(d.std(1, ddof=1) / np.sqrt(n))
+        ratio_ok = np.log(js / js[best]) <= np.nan_to_num(lr.std(1, ddof=1) / np.sqrt(n))
+        # the delta method's standard error of log(mean a / mean b) over the blocks
+        z = B / js[:, None] - B[best] / js[best]
+        delta_ok = np.log(js / js[best]) <= np.nan_to_num(z.std(1, ddof=1) / np.sqrt(n))
+    e = {"log": log_ok, "arith": arith_ok, "log+arith": log_ok & arith_ok, "ratio": ratio_ok, "ratio-delta": delta_ok,
+         "best's se": js <= js[best] + B[best].std(ddof=1) / np.sqrt(n), "min": js == js[best]}[rule]
+    e = e & ok & np.isfinite(js)
+    e[best] = True
+    return e
+
+
+RULES = ("log", "arith", "log+arith", "ratio", "ratio-delta", "best's se", "min")
+
+
+def choose(table: pd.DataFrame, cap: dict, rule: str) -> int:
+    B = np.stack(cap["scores"])
+    ok = table["in_band"].to_numpy(bool)
+    e = np.flatnonzero(eligible(rule, B, cap["weights"], ok))
+    return int(e[np.lexsort((table["JS_valid"].to_numpy(float)[e], table["n_terms"].to_numpy()[e]))[0]])
+
+
+def synthetic_case(name: str, k: int):
+    """Draw k of one of bench_honest's synthetic cases: its seeds + 100 k."""
+    h, s = bench_honest, 100 * k
+    if name == "short records (45 candidates)":
+        return (gb.Dataset(h._synthetic(1 + s, 300), h._synthetic(2 + s, 150), h._true_points()),
+                h._synthetic(3 + s, 4000), gb.Candidates(4, 4, degree=2), 1e-3)
+    if name == "slow disturbance":
+        return (gb.Dataset(h._synthetic(4 + s, 1200, drift=0.3), h._synthetic(5 + s, 600, drift=0.3), h._true_points()),
+                h._synthetic(6 + s, 4000, drift=0.3), gb.Candidates(3, 3, degree=2), 1e-3)
+    return (gb.Dataset(h._synthetic(7 + s, 1200), h._synthetic(8 + s, 600), h._true_points(0.15)),
+            h._synthetic(9 + s, 4000), gb.Candidates(3, 3, degree=2), 0.03)
+
+
+SYNTHETIC = ("short records (45 candidates)", "slow disturbance", "static points off the records")
+
+
+def tank_case(k: int):
+    s = 10 * k + 1
+    data = gb.Dataset(bench_honest._tanks(s, 1200), bench_honest._tanks(s + 1, 600), bench_honest._tank_points())
+    return data, bench_honest._tanks(s + 2, 1500), gb.Candidates(3, 3, degree=3), 25.0
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--cases", default="", help="comma-separated case names (default: all)")
+    ap.add_argument("--tank-draws", type=int, default=3, help="draws of the cascaded tanks (bench_honest's the first)")
+    ap.add_argument("--synthetic-draws", type=int, default=1, help="draws of each synthetic case (likewise)")
+    args = ap.parse_args()
+    names = [c for c in args.cases.split(",") if c]
+    print(f"# bench_rule ({datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC, git {git_rev()}): "
+          f"{machine()}", flush=True)
+    warnings.simplefilter("ignore")
+    cases = bench_honest.cases()
+    for k in range(1, args.tank_draws):
+        cases[f"cascaded tanks, draw {k + 1}"] = tank_case(k)
+    for name in SYNTHETIC:
+        for k in range(1, args.synthetic_draws):
+            cases[f"{name}, draw {k + 1}"] = synthetic_case(name, k)
+    out = []
+    for name, (data, test, cand, band) in cases.items():
+        if names and name not in names:
+            continue
+        sel = {}
+        for box, b in (("gray", band), ("black", np.inf)):
+            CAUGHT.clear()
+            g = gb.select_graybox(cand, data, band=b, test=test, executor="processes", workers=2)
+            cap = CAUGHT[-1]
+            cap["library"] = f"{g.chosen['n_terms']} {g.chosen['estimator']}"
+            t = cap["table"].set_index("estimator", append=True)
+            t["JS_test"] = g.table.set_index("estimator", append=True)["JS_test"].reindex(t.index).to_numpy()
+            sel[box] = (t.reset_index(level="estimator"), cap)
+        for rule in RULES:
+            (gt, gc), (bt, bc) = sel["gray"], sel["black"]
+            i, j = choose(gt, gc, rule), choose(bt, bc, rule)
+            test_g, test_b = gt["JS_test"].to_numpy(float), bt["JS_test"].to_numpy(float)
+            inb = gt["in_band"].to_numpy(bool)
+            regret = test_g[i] / test_g[inb & np.isfinite(test_g)].min()
+            out.append(dict(case=name, rule=rule, gray=f"{gt.iloc[i]['n_terms']} {gt.iloc[i]['estimator']}",
+                            vs_black=test_g[i] / test_b[j], regret=regret,
+                            black_regret=test_b[j] / test_b[np.isfinite(test_b)].min(),
+                            library=gc["library"],
+                            goal=bool(test_g[i] / test_b[j] <= 1.1 and regret <= 1.2 and gt.iloc[i]["in_band"])))
+        print(pd.DataFrame(out[-len(RULES):]).to_string(index=False), flush=True)
+    df = pd.DataFrame(out)
+    df["cell"] = [f"{v:.3g} ({r:.3g}){'' if g else ' ✗'}" for v, r, g in zip(df.vs_black, df.regret, df.goal)]
+    wide = df.pivot(index="rule", columns="case", values="cell").reindex(list(RULES))
+    wide.insert(0, "goal met", df.groupby("rule")["goal"].sum().reindex(list(RULES)).astype(int))
+    gm = df.assign(lv=np.log(df.vs_black), lr=np.log(df.regret)).groupby("rule")[["lv", "lr"]].mean()
+    wide.insert(1, "geo. mean vs black", np.exp(gm["lv"]).reindex(list(RULES)).round(3))
+    wide.insert(2, "geo. mean regret", np.exp(gm["lr"]).reindex(list(RULES)).round(3))
+    print("\n" + wide.to_markdown())
+    df["family"] = df["case"].str.split(", draw").str[0]
+    fam = df.assign(g=np.log(df.regret), b=np.log(df.black_regret), v=np.log(df.vs_black)).groupby(["rule", "family"])
+    for col, what in (("g", "gray regret"), ("b", "black regret"), ("v", "gray / black")):
+        t = np.exp(fam[col].mean()).unstack().reindex(list(RULES))
+        t.insert(0, "all cases", np.exp(df.assign(x=np.log(df[{"g": "regret", "b": "black_regret",
+                                                                 "v": "vs_black"}[col]])).groupby("rule")["x"].mean()))
+        print(f"\nGeometric means over the draws, {what}:\n" + t.to_markdown(floatfmt=".3f"))
+    print("\n" + df.pivot(index="rule", columns="case", values="gray").reindex(list(RULES)).to_markdown())
+
+
+if __name__ == "__main__":
+    main()
