@@ -100,6 +100,6 @@ def test_rule_min_takes_the_fewest_terms_among_rows_tied_on_the_best_js():
     table = pd.DataFrame({"in_band": [True, True, True], "JS_valid": [1e-6, 1e-6, 2e-6], "n_terms": [6, 4, 3]},
                          index=["six", "four", "three"])
     scores = [np.array([1e-6]), np.array([1e-6]), np.array([2e-6])]
-    pos, rule = _choose(table, scores, "min")
+    pos, rule = _choose(table, scores, np.ones(1), "min")
     assert (table.index[pos], rule) == ("four", "min")
     assert list(table["eligible"]) == [True, True, False]

@@ -5,7 +5,7 @@ import warnings
 import numpy as np
 import pandas as pd
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import graybox as gb
@@ -328,7 +328,7 @@ def test_the_rule_chooses_among_the_in_band_rows(data, rule):
     if rule == "min":
         assert res.chosen["JS_valid"] == inb["JS_valid"].min()
     else:
-        # eligible: within one standard error (per-block log ratio) of the best row; the choice has the fewest terms
+        # eligible: log(J_S / best J_S) within its standard error over the blocks; the choice has the fewest terms
         assert (inb["eligible"] == (inb["vs_best"] <= inb["vs_best_se"].fillna(0))).all()
         assert res.chosen["n_terms"] == inb[inb["eligible"]]["n_terms"].min()
         assert res.chosen["JS_valid"] >= inb["JS_valid"].min()
@@ -499,6 +499,11 @@ def _rule_table(js_blocks, n_terms, jsf):
     return table, scores
 
 
+def _equal(scores):
+    """The blocks' weights when they are of one size (each block's share of the samples)."""
+    return np.full(scores[0].size, 1.0 / scores[0].size)
+
+
 def test_one_se_takes_the_fewest_terms_within_one_standard_error_then_the_smaller_js():
     from graybox.experiments._select import _choose
 
@@ -508,13 +513,52 @@ def test_one_se_takes_the_fewest_terms_within_one_standard_error_then_the_smalle
     # rows 2 and 3: clearly worse on every block
     blocks = [base, base * np.exp([0.3, -0.2, 0.25, -0.1, 0.05]), base * 3.0, base * 1.5]
     table, scores = _rule_table(blocks, [5, 5, 5, 9], [0.8, 0.2, 0.01, 0.5])
-    pos, rule = _choose(table, scores, "one-se")
+    pos, rule = _choose(table, scores, _equal(scores), "one-se")
     assert rule == "one-se" and pos == 0  # of one size, the smaller J_S (J_SF does not break the tie)
     assert list(table["eligible"]) == [True, True, False, False]
     # fewer terms within one standard error come first
     table, scores = _rule_table(blocks[:2] + [base * np.exp([0.2, 0.1, -0.2, 0.1, -0.1])], [5, 5, 3], [0.8, 0.2, 0.9])
-    assert _choose(table.copy(), scores, "one-se")[0] == 2
-    assert _choose(table.copy(), scores, "min")[0] == 0
+    assert _choose(table.copy(), scores, _equal(scores), "one-se")[0] == 2
+    assert _choose(table.copy(), scores, _equal(scores), "min")[0] == 0
+
+
+def test_a_row_that_fails_on_some_blocks_is_not_within_one_standard_error_of_a_steady_one():
+    # the cascaded tanks of bench_honest (2026-11-29): an 8-term PE row had validation J_S 3.6 times the best
+    # 12-term row's, 5 to 9 times its error on two blocks and below it on three; the mean of the per-block log
+    # ratios (0.23) was within its standard error (0.94), so one-se took it: test J_S 5127 against 1022-1260 for the
+    # best rows. The rule now compares the J_S ratio itself (log 3.6 = 1.27) with its standard error (0.59).
+    from graybox.experiments._select import _choose
+
+    steady = np.array([577.0, 1807.0, 1736.0, 1453.0, 1559.0])
+    erratic = np.array([7038.0, 16117.0, 1377.0, 581.0, 134.0])
+    table, scores = _rule_table([steady, erratic], [12, 8], [2.0, 24.0])
+    pos, rule = _choose(table, scores, _equal(scores), "one-se")
+    assert (pos, rule) == (0, "one-se") and list(table["eligible"]) == [True, False]
+    assert table["vs_best"].iloc[1] == pytest.approx(np.log(erratic.mean() / steady.mean()))
+    r = np.log(erratic / steady)  # the old statistic would have let it in
+    assert r.mean() <= r.std(ddof=1) / np.sqrt(5)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.lists(st.floats(0.1, 10.0), min_size=4, max_size=4), min_size=2, max_size=6),
+       st.lists(st.floats(0.5, 2.0), min_size=4, max_size=4), st.floats(-300.0, 300.0))
+def test_the_rule_reads_the_js_ratio_whatever_the_units_and_block_sizes(blocks, sizes, power):
+    # vs_best is log(J_S / the best J_S) with J_S the blocks' mean weighted by their samples, and the rule and its
+    # standard error are the same with every J_S in other units (times 10^power: y in mlc or Pa)
+    from graybox.experiments._select import _choose
+
+    w = np.array(sizes) / np.sum(sizes)
+    scores = [np.asarray(b, float) for b in blocks]
+    assume(len({float(w @ b) for b in scores}) == len(scores))  # one best row
+    n = list(range(2, 2 + len(scores)))
+    table = pd.DataFrame({"in_band": [True] * len(n), "JS_valid": [float(w @ b) for b in scores], "n_terms": n})
+    pos, _ = _choose(table, scores, w, "one-se")
+    best = int(np.argmin(table["JS_valid"]))
+    np.testing.assert_allclose(np.exp(table["vs_best"]), table["JS_valid"] / table["JS_valid"].iloc[best], rtol=1e-12)
+    big = [b * 10.0 ** power for b in scores]
+    scaled = table.assign(JS_valid=[w @ b for b in big])
+    assert _choose(scaled, big, w, "one-se")[0] == pos
+    np.testing.assert_allclose(scaled["vs_best_se"], table["vs_best_se"], rtol=1e-9)
 
 
 @settings(max_examples=60, deadline=None)
@@ -524,7 +568,7 @@ def test_the_one_se_choice_is_eligible_smallest_then_best_on_the_choosing_data(r
     from graybox.experiments._select import _choose
 
     table, scores = _rule_table([r[0] for r in rows], [r[1] for r in rows], [r[2] for r in rows])
-    pos, _ = _choose(table, scores, "one-se")
+    pos, _ = _choose(table, scores, _equal(scores), "one-se")
     el = table[table["eligible"]]
     assert table["eligible"].iloc[pos]
     assert table["n_terms"].iloc[pos] == el["n_terms"].min()
@@ -750,22 +794,26 @@ def test_several_validation_and_test_records():
     assert res.chosen["JS_valid"] == pytest.approx((a + b) / (na + nb), rel=1e-9)
     (a, na), (b, nb) = sse(t1), sse(t2)
     assert res.chosen["JS_test"] == pytest.approx((a + b) / (na + nb), rel=1e-9)
-    # the rule's scores are six blocks, three of each validation record: a row's vs_best is the mean log ratio of
-    # its block J_S to the best row's over them, and vs_best_se that mean's standard error
+    # the rule's scores are six blocks, three of each validation record: a row's vs_best is log(J_S / the best
+    # row's J_S), J_S the blocks' mean weighted by their samples, and vs_best_se its standard error by the delta
+    # method over the six blocks (z_i = a_i / J_a - b_i / J_b)
 
     def block_js(model):
-        out = []
+        out, n = [], []
         for rec in (v1, v2):
             e2 = (rec.y - model.simulate(rec)) ** 2
             edges = np.linspace(3, len(rec), 4).astype(int)
             out += [e2[a:b].mean() for a, b in zip(edges[:-1], edges[1:])]
-        return np.array(out)
+            n += list(np.diff(edges))
+        return np.array(out), np.array(n) / np.sum(n)
 
     best = res.table.index[res.table["vs_best"] == 0][0]
+    (b, w) = block_js(res.model_of(best))
     for row in res.table.index:
-        r = np.log(block_js(res.model_of(row)) / block_js(res.model_of(best)))
-        assert res.table.loc[row, "vs_best"] == pytest.approx(r.mean(), abs=1e-9)
-        assert res.table.loc[row, "vs_best_se"] == pytest.approx(r.std(ddof=1) / np.sqrt(6), abs=1e-9)
+        a, _ = block_js(res.model_of(row))
+        z = a / (w @ a) - b / (w @ b)
+        assert res.table.loc[row, "vs_best"] == pytest.approx(np.log((w @ a) / (w @ b)), abs=1e-9)
+        assert res.table.loc[row, "vs_best_se"] == pytest.approx(np.sqrt(6 / 5 * np.sum((w * z) ** 2)), rel=1e-7)
 
 
 def test_candidates_that_are_all_zero_on_the_records_are_said_by_the_search():

@@ -53,7 +53,7 @@ def test_the_rule_panel_draws_each_row_at_its_ratio_to_the_best_and_rings_the_ch
     ok = np.isfinite(t["vs_best"].to_numpy(float))
     pts, ring = _points(fig.axes[0])
     want = np.column_stack([t["n_terms"][ok], np.exp(t["vs_best"][ok])])
-    # every drawn row is a row of the table at (terms, exp(mean log ratio)), and every row is drawn
+    # every drawn row is a row of the table at (terms, its J_S over the best row's), and every row is drawn
     assert len(pts) == ok.sum()
     for p in want:
         assert np.any(np.all(np.isclose(pts, p, rtol=1e-12), axis=1))

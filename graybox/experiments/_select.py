@@ -17,9 +17,9 @@ for the spread of that score. Its phases (one function each below):
    J_S on the test record;
 4. **choice** (:func:`_choose`) — per row the member chosen by D_SF on the choosing data (the
    smallest J_S among the members with J_SF ≤ B; a black box has one member), then the row: with
-   ``rule="one-se"`` the fewest parameters among the rows whose per-block log ratio of J_S to the
-   best row's is, on average, within one standard error of zero; with ``rule="min"`` the smallest
-   J_S;
+   ``rule="one-se"`` the fewest parameters among the rows whose log ratio of J_S to the best row's
+   is within one standard error of zero (the error of that ratio over the blocks, paired); with
+   ``rule="min"`` the smallest J_S;
 5. **refit** — the chosen row's member fitted on all the identification data.
 
 The winner of many candidates scored on one short record is optimistic on that record (the
@@ -147,8 +147,8 @@ class GrayboxSelection:
         identification data; every row's errors counted from the candidates' largest lag on, the
         same samples for all; an error below round-off, 1e-20 of the mean square output, counts as that floor), ``JSF``
         (its static error, worst fold; NaN without static points), ``in_band``, ``vs_best`` and
-        ``vs_best_se`` (mean per-block log ratio of its J_S to the best row's, and its standard
-        error), ``eligible`` (the rule could choose it), ``rank`` (1: the choice); with a test
+        ``vs_best_se`` (log of its J_S over the best row's, and that log ratio's standard error over
+        the blocks by the delta method, both rows on the same blocks), ``eligible`` (the rule could choose it), ``rank`` (1: the choice); with a test
         record also ``JS_test`` (its refitted model's J_S there, counted as ``JS_valid`` is: from
         the candidates' largest lag on, the same samples for every row, so it differs from
         ``graybox.js(model, test)``, which counts from the model's own largest lag, when the row's
@@ -1219,17 +1219,25 @@ def _member(res: dict, band: float) -> tuple[int, bool]:
     return int(ok[np.lexsort((ok, js[ok], res["jsf"][ok]))[0]]), False
 
 
-def _log_ratio(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
-    """Mean and standard error of log(a_i / b_i) over the blocks (NaN SE with one block)."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        r = np.log(a / b)
-    if not np.all(np.isfinite(r)):
+def _ratio_se(a: np.ndarray, b: np.ndarray, w: np.ndarray) -> tuple[float, float]:
+    """log(J_a / J_b) of two rows' J_S (``J = w @ blocks``) and its standard error over the blocks, paired: the
+    delta method, z_i = a_i / J_a − b_i / J_b, SE² = n / (n − 1) Σ w_i² z_i² (NaN SE with one block).
+
+    The ratio is the one the table's J_S columns show, so a row that fails badly on one block counts as it does
+    in J_S; a mean of per-block log ratios (the rule before) let such a row in (BENCHMARKS.md, the choosing rule).
+    """
+    ja, jb = float(w @ a), float(w @ b)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        r = np.log(ja / jb)
+        z = a / ja - b / jb
+    if not (np.isfinite(r) and np.all(np.isfinite(z))):
         return np.inf, np.nan
-    se = r.std(ddof=1) / np.sqrt(r.size) if r.size > 1 else np.nan
-    return float(r.mean()), float(se)
+    n = z.size
+    se = float(np.sqrt(n / (n - 1) * np.sum((w * z) ** 2))) if n > 1 else np.nan
+    return float(r), se
 
 
-def _choose(table: pd.DataFrame, scores: list[np.ndarray], rule: str) -> tuple[int, str]:
+def _choose(table: pd.DataFrame, scores: list[np.ndarray], weights: np.ndarray, rule: str) -> tuple[int, str]:
     """Position of the chosen row among the in-band rows (``table`` gains vs_best, vs_best_se,
     eligible); the rule used."""
     ok = np.flatnonzero(table["in_band"].to_numpy())
@@ -1237,7 +1245,7 @@ def _choose(table: pd.DataFrame, scores: list[np.ndarray], rule: str) -> tuple[i
     best = int(ok[np.argmin(js[ok])])
     vs, se = np.full(len(table), np.nan), np.full(len(table), np.nan)
     for i in ok:
-        vs[i], se[i] = _log_ratio(scores[i], scores[best])
+        vs[i], se[i] = _ratio_se(scores[i], scores[best], weights)
     table["vs_best"], table["vs_best_se"] = vs, se
     if rule == "one-se" and scores[best].size < 2:
         rule = "min"
@@ -1374,8 +1382,8 @@ def select_graybox(
         samples) and ``JSF_test`` columns. The choice is the same with and without them.
     rule : {"one-se", "min"}
         How the row is chosen from the scores on the choosing data: ``"one-se"`` (default) the
-        fewest parameters among the rows within one standard error of the best (per-block log
-        ratio of J_S), ``"min"`` the smallest J_S (the fewest parameters among rows tied on it).
+        fewest parameters among the rows within one standard error of the best (the log ratio of
+        J_S, its error over the blocks), ``"min"`` the smallest J_S (the fewest parameters among rows tied on it).
     blocks : int, optional
         Contiguous blocks each validation record is cut into for the standard errors (>= 2;
         default 5; fewer, with a :class:`SelectionWarning`, when the record is too short for
@@ -1540,7 +1548,7 @@ def select_graybox(
                  "validation record (a Dataset) gives an honest choice", SelectionWarning)
             (jobs, results), (table, members, scores) = again, tabled
     if table["in_band"].any():
-        pos, used = _choose(table, scores, rule)
+        pos, used = _choose(table, scores, results[0]["weights"], rule)
         used_fallback = False
     else:
         pos, used = _fallback(table, results, band, fallback), "min"
