@@ -109,3 +109,24 @@ def test_a_local_model_refuses_data_at_another_period_than_its_model():
     with pytest.raises(ValueError, match="every 0.1 s"):
         gb.local_model(m, 0.5, data=_records(0.2, seed=2))
     assert gb.local_model(gb.Model(m.structure, m.theta), 0.5, data=_records(0.2, seed=2)).Ts == 0.2
+
+
+def test_records_whose_periods_drift_past_the_tolerance_are_refused_in_any_order():
+    # each record was held to the first alone: 0.1, 0.10009 and 0.10018 s (the last two each within 1e-3 of the middle
+    # one, 1.8e-3 apart) were one period listed from the middle and refused listed from the end
+    import itertools
+
+    import dask.array as da
+
+    recs = [dataclasses.replace(_records(0.1, seed=s), Ts=0.1 * (1 + 0.9e-3 * s), name=f"r{s}") for s in range(3)]
+    for order in itertools.permutations(recs):
+        with pytest.raises(ValueError, match=r"'r[02]' is sampled every 0\.1(0018)? s but 'r[02]' every"):
+            gb.cls(ST, list(order))
+    drecs = [gb.DaskRecord(da.from_array(r.u, chunks=100), da.from_array(r.y, chunks=100), Ts=r.Ts, name=r.name)
+             for r in recs]
+    with pytest.raises(ValueError, match="'r[02]' is sampled every"):
+        gb.pe_thetas(ST, [drecs[1], drecs[0], drecs[2]], lambdas=[1.0])
+    # a choosing record is held to every fitting record, not to the first alone
+    with pytest.raises(ValueError, match="'r0' is sampled every 0.1 s but 'r2' every"):
+        gb.output_error(ST, [recs[1], recs[0]], choose_on=recs[2], n_starts=0)
+    assert gb.cls(ST, [recs[1], recs[0]]).model.Ts == recs[1].Ts  # within the tolerance: one period

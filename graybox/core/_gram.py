@@ -26,7 +26,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ._records import as_records, check_same_period, check_units, check_units_agree, require_lengths
+from ._records import as_records, check_one_period, check_units, check_units_agree, require_lengths
 from ._regressors import check_record_inputs, input_signals
 from ._terms import Term
 from ._reprs import short_repr
@@ -497,8 +497,7 @@ def as_gram_records(data: object) -> list:
     """Records as a list (in-memory or Dask), for code that only needs lengths."""
     if is_dask_data(data):
         recs = [data] if isinstance(data, DaskRecord) else list(data)
-        for r in recs[1:]:
-            check_same_period(recs[0], r)
+        check_one_period(recs)
         check_units_agree(recs, "the records of one fit must be in the same units (convert one of them)")
         return recs
     return as_records(data)  # a Dataset: its ident, in the units the Dataset names

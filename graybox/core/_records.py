@@ -552,12 +552,21 @@ def check_same_period(a: Record, b: Record) -> None:
     check_period(a.Ts, f"{a.name!r} is sampled", b)
 
 
+def check_one_period(records: Sequence[Any]) -> None:
+    """``ValueError`` naming two of them unless ``records`` (in memory or Dask) share one sampling period: the
+    slowest and the fastest to :data:`PERIOD_RTOL` relative (each held to the first alone, periods that drift let
+    1, 1.0009 and 1.0018 s pass in one order and not in another)."""
+    periods = [r.Ts for r in records]
+    check_same_period(records[int(np.argmin(periods))], records[int(np.argmax(periods))])
+
+
 def check_alike(a: Record | Sequence[Record], b: Record) -> None:
     """``ValueError`` naming both unless a further record ``b`` (one to choose or test on) can be read as the fitting
     record(s) ``a`` are: the same sampling period and, where both name them, the same units (those any of ``a``
     names: :func:`said_units`; inputs are read by name)."""
     recs = list(a) if isinstance(a, (list, tuple)) else [a]
-    check_same_period(recs[0], b)
+    for r in recs:  # each, not the first alone: the fitting records' periods may differ within the tolerance
+        check_same_period(r, b)
     for r in recs:  # the first that names a unit b contradicts is the one named
         check_same_units(r.units, f"{r.name!r} has", b, "convert one of them: a model holds in one set of units")
 
@@ -747,11 +756,13 @@ def as_records(data: object, part: str = "ident", name: str = "data") -> list[Re
                             f"{type(r).__name__}{record_hint(r if own else recs)}")
     for r in recs[1:]:
         check_compatible(recs[0], r)
+    check_one_period(recs)
     check_units_agree(recs, _SAME_UNITS)
     return recs
 
 
-__all__ += ["check_units", "require_lengths", "as_records", "record_hint", "static_hint", "as_input_array", "frame_inputs", "is_frame", "check_compatible", "check_alike", "carried_from", "said_units", "check_units_agree", "check_same_units", "check_fitted_on", "check_period", "check_same_period", "static_point_inputs",
+__all__ += ["check_units", "require_lengths", "as_records", "record_hint", "static_hint", "as_input_array", "frame_inputs", "is_frame", "check_compatible", "check_alike", "carried_from", "said_units", "check_units_agree", "check_same_units", "check_fitted_on", "check_period", "check_same_period", "check_one_period",
+            "static_point_inputs",
             "PERIOD_RTOL"]
 
 
