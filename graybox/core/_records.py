@@ -426,13 +426,21 @@ class StaticPoints(Relocked):
                 f"{range_text(self.ybar.min(), self.ybar.max())}{yu}{unc})")
 
 
-def require_lengths(records: Sequence[Any], max_lag: int) -> None:
+def require_lengths(records: Sequence[Any], max_lag: int, *, prefix: str = "", what: str = "") -> None:
     """Raise ``ValueError`` unless every record has more than ``max_lag`` samples; of several, a short one is named
-    by its position too (records made or loaded without a name are all called "record")."""
+    by its position too (records made or loaded without a name are all called "record"). ``what``: the records'
+    part, e.g. ``"choosing"`` (counted among their own, so that no fitting record is blamed), after ``prefix`` (the
+    argument, e.g. ``"choose_on: "``)."""
+    kind = f"{what} record" if what else "record"
     for i, r in enumerate(records):
-        if len(records) > 1 and len(r) < max_lag + 1:
-            raise ValueError(f"record {i + 1} of {len(records)} ({r.name!r}) has {len(r)} samples, fewer than max lag "
-                             f"+ 1 = {max_lag + 1}")
+        if len(r) >= max_lag + 1:
+            continue
+        if len(records) > 1:
+            raise ValueError(f"{prefix}{kind} {i + 1} of {len(records)} ({r.name!r}) has {len(r)} samples, fewer than "
+                             f"max lag + 1 = {max_lag + 1}")
+        if what:
+            raise ValueError(f"{prefix}the {kind} {r.name!r} has {len(r)} samples, fewer than max lag + 1 = "
+                             f"{max_lag + 1}")
         r.require_length(max_lag)
 
 

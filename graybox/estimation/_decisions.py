@@ -239,7 +239,7 @@ def choosing_js(pareto: ParetoSet, records: Record | Sequence[Record]) -> np.nda
                 raise ValueError(f"choose_on: the choosing record {c.name!r} is a fitting record ({f.name!r}): {advice}")
             check_overlap(c, f, "choosing", "fitting", advice, prefix="choose_on: ")
     th = np.where(np.isfinite(pareto.thetas), pareto.thetas, 0.0)
-    require_lengths(recs, pareto.structure.max_lag)
+    require_lengths(recs, pareto.structure.max_lag, prefix="choose_on: ", what="choosing")
     out = members_js(pareto.structure, th, recs, one_step=False)["JS"]
     out[list(pareto.failures)] = np.inf
     out = np.where(np.isfinite(out), out, np.inf)

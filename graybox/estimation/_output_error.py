@@ -47,7 +47,7 @@ from ..core._least_squares import (one_blas_thread, refuse_beyond_float_range, s
                                    unscaled_rss, unscaled_theta)
 from ..core._progress import progress_bar
 from ..core._records import (Dataset, Record, as_records, carried_from, check_alike, check_overlap, choosing_records,
-                             same_record)
+                             require_lengths, same_record)
 from ..core._terms import Structure
 from ..core._validation import (Relocked, FrozenFrame, FrozenMap, check_bool, check_choice, check_fields, check_int,
                                 check_margin_value, check_mean_square, check_real, check_seed, check_str, check_theta)
@@ -229,6 +229,7 @@ def output_error(
     crec: list[Record] = []
     if choose_on is not None:  # checked once here, not again by a refit inside the margin
         crec = choosing_records(choose_on)
+        require_lengths(crec, st.max_lag, prefix="choose_on: ", what="choosing")  # else blamed on a fitting record
         for c in crec:
             check_alike(given, c)
         if any(same_record(c, r) for c in crec for r in given):
