@@ -39,7 +39,8 @@ def test_a_short_choosing_record_is_said_to_be_one_not_a_fitting_record():
     fit = [_record(300), _record(200, seed=1)]
     choose = [_record(150, seed=3), _record(2, seed=2)]
     st = gb.Structure(["y(k-1)", "y(k-2)", "u(k-1)"])
-    front = gb.pe_pareto(st, fit, gb.StaticPoints([0.2, 0.8], [0.35, 1.4]), lambdas=[1.0, 0.5])
+    front = gb.ParetoSet.from_thetas(st, np.array([[0.7, 0.0, 0.5], [0.6, 0.1, 0.5]]), np.array([1.0, 0.5]), fit,
+                                     gb.StaticPoints([0.2, 0.8], [0.35, 1.4]))
     for call in (lambda c: gb.output_error(st, fit, choose_on=c, n_starts=0),
                  lambda c: gb.decide_dsf(front, band=1.0, choose_on=c)):
         with pytest.raises(ValueError, match=r"^choose_on: choosing record 2 of 2 \('record'\) has 2 samples, fewer "
