@@ -117,6 +117,25 @@ def test_a_column_of_text_or_dates_is_refused_as_a_wrong_type(column):
     assert rec.u.tolist() == [1.5, 2.5, 3.5]
 
 
+@pytest.mark.parametrize("stamps", [
+    pd.date_range("2026-11-26", periods=3, freq="s"),                  # read as µs since 1970: u1 ≈ 1.8e15
+    pd.date_range("2026-11-26", periods=3, freq="s", tz="UTC"),
+    pd.to_timedelta([0, 1, 2], unit="s"),
+])
+def test_a_column_of_dates_beside_numbers_in_a_dataframe_is_refused_as_a_wrong_type(stamps):
+    # a frame's own time column beside an input (the frame of a logger, its output dropped): its values are objects
+    # (Timestamps) in the frame's one array, which the check of dates did not look into, and the conversion made of
+    # them microseconds since 1970, an input 'u1' of 1.8e15
+    df = pd.DataFrame({"t": stamps, "u": [1.0, 2.0, 3.0]})
+    with pytest.raises(TypeError, match="must be numbers, got (dates or clock times|time spans)"):
+        gb.Record(df, [1.0, 2.0, 3.0], Ts=1.0)
+    with pytest.raises(TypeError, match="must be numbers, got (dates or clock times|time spans)"):
+        gb.StaticPoints(df, [1.0, 2.0, 3.0])
+    with pytest.raises(TypeError, match="must be numbers, got (dates or clock times|time spans)"):
+        gb.Record(np.column_stack([np.asarray(stamps, dtype=object), [1.0, 2.0, 3.0]]), [1.0, 2.0, 3.0])
+    assert gb.Record(df[["u"]], [1.0, 2.0, 3.0]).u.tolist() == [1.0, 2.0, 3.0]
+
+
 def test_a_dataframe_of_inputs_holding_the_output_column_is_refused():
     # Record(df, df["y"]) read the frame by position: two inputs u1 = u, u2 = y, the output fed in as an input
     df = pd.DataFrame({"u": [1.0, 2.0, 3.0, 4.0], "y": [0.5, 1.0, 1.5, 2.0]})

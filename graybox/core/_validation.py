@@ -11,6 +11,7 @@ a value of the right type outside its allowed range (``-1``, ``nan``, ``inf``, a
 from __future__ import annotations
 
 import dataclasses
+import datetime
 import numbers
 import os
 import reprlib
@@ -335,10 +336,22 @@ def refuse_non_real(x: object, name: str) -> None:
     if kind in "US" or (kind == "O" and any(isinstance(v, (str, bytes)) for v in arr.flat)):
         raise TypeError(f"{name} must be numbers, got strings; convert them first (e.g. with float), or read a "
                         "file with graybox.load_record_csv / load_static_csv")
+    held = arr.dtype
+    if kind == "O":
+        # a DataFrame's time column beside numbers arrives as objects (Timestamps), which the conversion turns into
+        # counts of µs since 1970 as it does a datetime64 column
+        stamp = next((v for v in arr.flat if isinstance(v, _TIMES)), None)
+        if stamp is not None:
+            kind = "m" if isinstance(stamp, (datetime.timedelta, np.timedelta64)) else "M"
+            held = type(stamp).__name__
     if kind in "Mm":  # numpy turns them into counts of its time unit (ns or µs since 1970) without a word
         what = "dates or clock times" if kind == "M" else "time spans"
-        raise TypeError(f"{name} must be numbers, got {what} ({arr.dtype}): a time column is no signal; a record's "
+        raise TypeError(f"{name} must be numbers, got {what} ({held}): a time column is no signal; a record's "
                         "time is its sampling period Ts (seconds)")
+
+
+#: Values of time that a float conversion reads as counts of a time unit (pandas' Timestamp and Timedelta among them).
+_TIMES = (datetime.date, datetime.time, datetime.timedelta, np.datetime64, np.timedelta64)
 
 
 def real_array(x: object, name: str, what: str = "numbers") -> np.ndarray:
