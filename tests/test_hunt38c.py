@@ -128,12 +128,12 @@ def test_a_column_of_dates_beside_numbers_in_a_dataframe_is_refused_as_a_wrong_t
     # them microseconds since 1970, an input 'u1' of 1.8e15
     df = pd.DataFrame({"t": stamps, "u": [1.0, 2.0, 3.0]})
     with pytest.raises(TypeError, match="must be numbers, got (dates or clock times|time spans)"):
-        gb.Record(df, [1.0, 2.0, 3.0], Ts=1.0)
+        gb.Record(df, [0.5, 1.0, 1.5], Ts=1.0)
     with pytest.raises(TypeError, match="must be numbers, got (dates or clock times|time spans)"):
-        gb.StaticPoints(df, [1.0, 2.0, 3.0])
+        gb.StaticPoints(df, [0.5, 1.0, 1.5])
     with pytest.raises(TypeError, match="must be numbers, got (dates or clock times|time spans)"):
         gb.Record(np.column_stack([np.asarray(stamps, dtype=object), [1.0, 2.0, 3.0]]), [1.0, 2.0, 3.0])
-    assert gb.Record(df[["u"]], [1.0, 2.0, 3.0]).u.tolist() == [1.0, 2.0, 3.0]
+    assert gb.Record(df[["u"]], [0.5, 1.0, 1.5]).u.tolist() == [1.0, 2.0, 3.0]
 
 
 def test_a_dataframe_of_inputs_holding_the_output_column_is_refused():
@@ -150,6 +150,24 @@ def test_a_dataframe_of_inputs_holding_the_output_column_is_refused():
     assert gb.Record(df.drop(columns="y"), df["y"], Ts=1.0).n_inputs == 1
     # other columns are read by position as before, e and k among them (an error signal e as the input)
     assert gb.Record(pd.DataFrame({"e": [1.0, 2.0]}), [0.0, 1.0]).u.tolist() == [1.0, 2.0]
+
+
+def test_a_dataframe_of_inputs_holding_the_output_s_samples_is_refused_whatever_y_is_given_as():
+    # Record(df, df["p"]) was refused, but Record(df, df["p"].to_numpy()) (or np.loadtxt's column, or an unnamed
+    # Series) took the output's column as an input u2: the same mistake, said only when y came as a named Series
+    rng = np.random.default_rng(0)
+    df = pd.DataFrame({"speed": rng.uniform(size=8), "p": rng.uniform(size=8)})
+    for y in (df["p"].to_numpy(), df["p"].tolist(), pd.Series(df["p"].to_numpy())):
+        with pytest.raises(ValueError, match=r"column 'p' holds the output's samples.*df\[\['speed'\]\]"):
+            gb.Record(df, y, Ts=1.0)
+        with pytest.raises(ValueError, match="column 'p' holds the output's samples"):
+            gb.StaticPoints(df, y)
+        with pytest.raises(ValueError, match="column 'p' holds the output's samples"):
+            gb.StaticPoints.from_repeats(df, y)
+    # the inputs alone, and one input that is the output as a plain array (a test's Record(u, u)), are taken
+    assert gb.Record(df[["speed"]], df["p"].to_numpy()).u.tolist() == df["speed"].tolist()
+    assert gb.Record(df["p"].to_numpy(), df["p"].to_numpy()).n_inputs == 1
+    assert gb.Record(df[["speed", "speed"]].set_axis(["a", "b"], axis=1), df["p"].to_numpy()).n_inputs == 2
 
 
 # --- what a variant needs from every data set is refused with the spec, not as a failed cell in every row ----------

@@ -66,15 +66,17 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
     (``u`` for one column, ``u1 … um`` for m). A pandas Series (one point ū, a DataFrame's row
     ``df.iloc[k]``) is read so by its index labels; one named as an input whose labels are none (a column,
     ``df["speed"]``) is that input's samples or levels, read as the one-column DataFrame it came from. Anything else is returned as it is. ``output``:
-    the output as a named Series (:func:`output_series`), whose column (its name, its samples) no
-    input may be: neither a column of ``x`` nor ``x`` itself. ``steady``: ``x`` is steady-state levels, where the
+    the output's samples (array_like; a named Series, :func:`output_series`, names its column too), whose column no
+    input may be: neither a column of ``x`` (of two or more: one input passed as the output is a caller's own
+    choice) nor ``x`` itself. ``steady``: ``x`` is steady-state levels, where the
     transient inputs among ``names`` rest at 0 and may be left out (:func:`~graybox.core._transient.steady_levels`
     fills them in): columns naming every other input are read by name too, in their order.
     """
     series = _is_series(x)
     if not (series or is_frame(x)):
         return x
-    label = None if output is None else output.name  # type: ignore[attr-defined]
+    named = output_series(output)
+    label = None if named is None else named.name  # type: ignore[attr-defined]
     if series and label is not None and getattr(x, "name", None) == label and _same_samples(x, output):
         raise ValueError(f"{name}: {label!r} is both the input and the output; pass the input column as u")
     cols = list(x.index if series else x.columns)
@@ -89,6 +91,15 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
             raise ValueError(f"{name}: the {what} {labels} hold {out!r}, {whose}: pass the input columns only, e.g. "
                              f"df.drop(columns={out!r}) or df[{rest!r}] (a time column is no input: give its step "
                              "as Ts=)")
+    if not series and output is not None and len(cols) > 1:
+        # the output's column under another name, y given as an array (df["p"].to_numpy(), np.loadtxt's column): no
+        # name to tell it by, its samples do
+        same = [l for c, l in zip(cols, labels) if _same_samples(x[c], output)]
+        if same:
+            rest = [c for c in labels if c not in same]
+            raise ValueError(f"{name}: the {what} {labels}: column {same[0]!r} holds the output's samples, which no "
+                             f"input may be: pass the input columns only, e.g. df[{rest!r}] (a time column is no "
+                             "input: give its step as Ts=)")
     expected = tuple(default_input_names(len(cols)) if names is None else names)
     hits = [c for c in labels if c in expected]
     if series and not hits and isinstance(getattr(x, "name", None), str) and x.name in expected:
@@ -202,7 +213,7 @@ class Record(Relocked):
 
     def __post_init__(self) -> None:
         check_str(self.name, "Record: name")  # a label every message and file carries
-        u = as_input_array(self.u, f"{self.name}: u", self.input_names, output=output_series(self.y))
+        u = as_input_array(self.u, f"{self.name}: u", self.input_names, output=self.y)
         y = as_1d_finite(self.y, f"{self.name}: y")
         if u.shape[0] != y.shape[0]:
             raise ValueError(_lengths(self.name, "u", "y", u, y))
@@ -311,7 +322,7 @@ class StaticPoints(Relocked):
 
     def __post_init__(self) -> None:
         check_str(self.name, "StaticPoints: name")
-        u = as_input_array(self.ubar, f"{self.name}: ubar", self.input_names, output=output_series(self.ybar),
+        u = as_input_array(self.ubar, f"{self.name}: ubar", self.input_names, output=self.ybar,
                            row="point")
         y = as_1d_finite(self.ybar, f"{self.name}: ybar")
         if u.shape[0] != y.shape[0]:
@@ -389,7 +400,7 @@ class StaticPoints(Relocked):
             there. (Their spread is the static uncertainty that D_SF's band B stands for.)
         """
         check_str(name, "StaticPoints: name")
-        u = as_input_array(ubar, f"{name}: ubar", input_names, output=output_series(ybar), row="point")
+        u = as_input_array(ubar, f"{name}: ubar", input_names, output=ybar, row="point")
         y = as_1d_finite(ybar, f"{name}: ybar")
         if u.shape[0] != y.shape[0]:
             raise ValueError(_lengths(name, "ubar", "ybar", u, y))
