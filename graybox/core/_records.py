@@ -66,9 +66,10 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
     (``u`` for one column, ``u1 … um`` for m). A pandas Series (one point ū, a DataFrame's row
     ``df.iloc[k]``) is read so by its index labels; one named as an input whose labels are none (a column,
     ``df["speed"]``) is that input's samples or levels, read as the one-column DataFrame it came from. Anything else is returned as it is. ``output``:
-    the output's samples (array_like; a named Series, :func:`output_series`, names its column too), whose column no
-    input may be: neither a column of ``x`` (of two or more: one input passed as the output is a caller's own
-    choice) nor ``x`` itself. ``steady``: ``x`` is steady-state levels, where the
+    the output: a named Series (:func:`output_series`), whose column (its name, its samples) no input may be, neither
+    a column of ``x`` nor ``x`` itself; or a record's output samples however given (array_like), which no column
+    of a frame of two or more may hold (one input passed as the output is a caller's own choice). Static points pass
+    only a named Series: a few ȳ may equal an input's levels by the plant's own law (a unit gain). ``steady``: ``x`` is steady-state levels, where the
     transient inputs among ``names`` rest at 0 and may be left out (:func:`~graybox.core._transient.steady_levels`
     fills them in): columns naming every other input are read by name too, in their order.
     """
@@ -322,7 +323,7 @@ class StaticPoints(Relocked):
 
     def __post_init__(self) -> None:
         check_str(self.name, "StaticPoints: name")
-        u = as_input_array(self.ubar, f"{self.name}: ubar", self.input_names, output=self.ybar,
+        u = as_input_array(self.ubar, f"{self.name}: ubar", self.input_names, output=output_series(self.ybar),
                            row="point")
         y = as_1d_finite(self.ybar, f"{self.name}: ybar")
         if u.shape[0] != y.shape[0]:
@@ -400,7 +401,7 @@ class StaticPoints(Relocked):
             there. (Their spread is the static uncertainty that D_SF's band B stands for.)
         """
         check_str(name, "StaticPoints: name")
-        u = as_input_array(ubar, f"{name}: ubar", input_names, output=ybar, row="point")
+        u = as_input_array(ubar, f"{name}: ubar", input_names, output=output_series(ybar), row="point")
         y = as_1d_finite(ybar, f"{name}: ybar")
         if u.shape[0] != y.shape[0]:
             raise ValueError(_lengths(name, "ubar", "ybar", u, y))
