@@ -1032,12 +1032,15 @@ def _split_holdout(recs: list[Record], holdout: float, L: int) -> tuple[list[Rec
     if holdout == 0.0:
         return recs, []
     train, held = [], []
-    for r in recs:
+    for i, r in enumerate(recs):
         n = len(r)
         h = int(round(holdout * n))
         if h <= L or n - h <= L:
-            raise ValueError(f"holdout = {holdout:g} of record {r.name!r} ({n} samples) leaves {n - h} training and "
-                             f"{h} held-out samples; each part needs more than max(ny, nu) = {L}")
+            # of several, by position too: records made or loaded without a name are all called "record"
+            which = f"record {i + 1} of {len(recs)} ({r.name!r}, {n} samples)" if len(recs) > 1 else \
+                f"record {r.name!r} ({n} samples)"
+            raise ValueError(f"holdout = {holdout:g} of {which} leaves {n - h} training and {h} held-out samples; "
+                             f"each part needs more than max(ny, nu) = {L}")
         train.append(r.slice(0, n - h))
         held.append(r.slice(n - h, n))
     return train, held
