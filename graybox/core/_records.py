@@ -55,6 +55,15 @@ def _same_samples(a: object, b: object) -> bool:
         return False
 
 
+def _varies(y: object) -> bool:
+    """Whether a signal takes more than one value (False for what is no array of numbers: said where it is read)."""
+    try:
+        a = np.asarray(y, dtype=float)
+    except (TypeError, ValueError):
+        return False
+    return a.size > 1 and bool(np.any(a != a.flat[0]))
+
+
 def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: object = None, *,
                  steady: bool = False) -> object:
     """A DataFrame of inputs with its columns in the order of ``names`` (the one rule for every input).
@@ -92,9 +101,9 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
             raise ValueError(f"{name}: the {what} {labels} hold {out!r}, {whose}: pass the input columns only, e.g. "
                              f"df.drop(columns={out!r}) or df[{rest!r}] (a time column is no input: give its step "
                              "as Ts=)")
-    if not series and output is not None and len(cols) > 1:
+    if not series and output is not None and len(cols) > 1 and _varies(output):
         # the output's column under another name, y given as an array (df["p"].to_numpy(), np.loadtxt's column): no
-        # name to tell it by, its samples do
+        # name to tell it by, its samples do (where the output moves: one held where an input is held is a rest)
         same = [l for c, l in zip(cols, labels) if _same_samples(x[c], output)]
         if same:
             rest = [c for c in labels if c not in same]
