@@ -57,3 +57,18 @@ def test_a_record_too_short_for_the_neural_holdout_among_several_is_named_by_its
         gb.neural_narx(recs, ny=2, nu=2, ne=0, hidden=2, epochs=1, sim_epochs=0, holdout=0.2)
     with pytest.raises(ValueError, match=r"holdout = 0\.2 of record 'record' \(12 samples\)"):  # alone, as before
         gb.neural_narx(recs[1], ny=2, nu=2, ne=0, hidden=2, epochs=1, sim_epochs=0, holdout=0.2)
+
+
+def test_records_that_disagree_among_several_are_named_by_their_positions():
+    # was "'record' has inputs ('u',) but 'record' has inputs ('u1', 'u2')" and "'record' is sampled every 0.1 s but
+    # 'record' every 0.2 s", of three records all named "record"
+    rng = np.random.default_rng(0)
+    two = gb.Record(rng.uniform(size=(50, 2)), rng.uniform(size=50), Ts=0.1)
+    slow = gb.Record(rng.uniform(size=50), rng.uniform(size=50), Ts=0.2)
+    recs = [_record(300), _record(200, seed=1)]
+    with pytest.raises(ValueError, match=r"^data: records 1 and 3 of 3: 'record' has inputs \('u',\) but 'record' "
+                                         r"has inputs \('u1', 'u2'\)"):
+        gb.cls(["y(k-1)", "u(k-1)"], recs + [two])
+    with pytest.raises(ValueError, match=r"^data: records 1 and 2 of 3: 'record' is sampled every 0\.1 s but "
+                                         r"'record' every 0\.2 s"):
+        gb.cls(["y(k-1)", "u(k-1)"], [recs[0], slow, recs[1]])

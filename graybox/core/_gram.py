@@ -497,7 +497,7 @@ def as_gram_records(data: object) -> list:
     """Records as a list (in-memory or Dask), for code that only needs lengths."""
     if is_dask_data(data):
         recs = [data] if isinstance(data, DaskRecord) else list(data)
-        check_one_period(recs)
+        check_one_period(recs, "data")
         check_units_agree(recs, "the records of one fit must be in the same units (convert one of them)")
         return recs
     return as_records(data)  # a Dataset: its ident, in the units the Dataset names

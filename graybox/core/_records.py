@@ -581,12 +581,16 @@ def check_same_period(a: Record, b: Record) -> None:
     check_period(a.Ts, f"{a.name!r} is sampled", b)
 
 
-def check_one_period(records: Sequence[Any]) -> None:
-    """``ValueError`` naming two of them unless ``records`` (in memory or Dask) share one sampling period: the
-    slowest and the fastest to :data:`PERIOD_RTOL` relative (each held to the first alone, periods that drift let
-    1, 1.0009 and 1.0018 s pass in one order and not in another)."""
+def check_one_period(records: Sequence[Any], name: str = "records") -> None:
+    """``ValueError`` naming two of them (by position too, after ``name``, the argument) unless ``records`` (in
+    memory or Dask) share one sampling period: the slowest and the fastest to :data:`PERIOD_RTOL` relative (each
+    held to the first alone, periods that drift let 1, 1.0009 and 1.0018 s pass in one order and not in another)."""
     periods = [r.Ts for r in records]
-    check_same_period(records[int(np.argmin(periods))], records[int(np.argmax(periods))])
+    i, j = int(np.argmin(periods)), int(np.argmax(periods))
+    try:
+        check_same_period(records[i], records[j])
+    except ValueError as exc:
+        raise ValueError(f"{name}: records {i + 1} and {j + 1} of {len(records)}: {exc}") from None
 
 
 def check_alike(a: Record | Sequence[Record], b: Record) -> None:
@@ -783,9 +787,12 @@ def as_records(data: object, part: str = "ident", name: str = "data") -> list[Re
             own = isinstance(r, (str, os.PathLike)) or is_frame(r)  # a file or a frame: its own way to a Record
             raise TypeError(f"{name} must be a Record, a sequence of Records or a Dataset; got a sequence holding a "
                             f"{type(r).__name__}{record_hint(r if own else recs)}")
-    for r in recs[1:]:
-        check_compatible(recs[0], r)
-    check_one_period(recs)
+    for i, r in enumerate(recs[1:], 2):
+        try:
+            check_compatible(recs[0], r)
+        except ValueError as exc:  # by position too: records made or loaded without a name are all called "record"
+            raise ValueError(f"{name}: records 1 and {i} of {len(recs)}: {exc}") from None
+    check_one_period(recs, name)
     check_units_agree(recs, _SAME_UNITS)
     return recs
 
