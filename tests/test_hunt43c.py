@@ -403,6 +403,20 @@ def test_a_list_of_datasets_where_records_are_meant_is_told_to_pass_their_record
         gb.els(["y(k-1)", "u(k-1)"], [rec, "run2.csv"])
 
 
+def test_select_graybox_given_a_list_of_datasets_is_told_what_it_takes():
+    # the hint said "(select_graybox takes the Datasets themselves)", also to select_graybox, which refuses them
+    import graybox as gb
+    rng = np.random.default_rng(0)
+    rec = gb.Record(rng.uniform(size=40), rng.uniform(size=40), Ts=0.5)
+    d = gb.Dataset(rec, rec.slice(0, 30))
+    for call in (lambda: gb.select_graybox(gb.Candidates(1, 1), [d, d], sizes=[2], progress=False),
+                 lambda: gb.els(["y(k-1)", "u(k-1)"], [d, d])):
+        with pytest.raises(TypeError, match=r"\[d\.ident for d in datasets\].*select_graybox.*validation="
+                                            r"\[d\.valid for d in datasets\]") as info:
+            call()
+        assert "takes the Datasets themselves" not in str(info.value)
+
+
 def test_terms_and_data_that_name_the_input_apart_are_told_how_to_name_it_alike(tmp_path):
     # was: "the terms use input 'u', but the record's inputs are ('power',)", no way out named: the record was
     # loaded with input_names=['power'] and the candidates made with the default name u

@@ -715,7 +715,8 @@ def record_hint(data: object) -> str:
         return "; make one of its signals: graybox.Record(d['u'], d['y'], Ts=seconds)"
     if isinstance(data, (tuple, list)) and any(isinstance(r, Dataset) for r in data):
         return ("; several experiments are a list of their records, e.g. [d.ident for d in datasets] "
-                "(select_graybox takes the Datasets themselves)")
+                "(select_graybox: with their validation records as validation=[d.valid for d in datasets] and "
+                "the static points as static=)")
     if isinstance(data, np.ndarray) or (isinstance(data, (tuple, list)) and data and all(
             isinstance(r, (np.ndarray, list, tuple, int, float, np.number)) or _is_series(r) for r in data)):
         return "; make one of the input and output samples: graybox.Record(u, y, Ts=seconds)"
