@@ -78,9 +78,10 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
     the output: a named Series (:func:`output_series`), whose column (its name, its samples) no input may be, neither
     a column of ``x`` nor ``x`` itself; or a record's output samples however given (array_like), which no column
     of a frame of two or more may hold (one input passed as the output is a caller's own choice). Static points pass
-    only a named Series: a few ȳ may equal an input's levels by the plant's own law (a unit gain). ``steady``: ``x`` is steady-state levels, where the
-    transient inputs among ``names`` rest at 0 and may be left out (:func:`~graybox.core._transient.steady_levels`
-    fills them in): columns naming every other input are read by name too, in their order.
+    only a named Series: a few ȳ may equal an input's levels by the plant's own law (a unit gain). ``steady``: ``x``
+    is steady-state levels, where the transient inputs among ``names`` rest at 0 and may be left out
+    (:func:`~graybox.core._transient.steady_levels` fills them in): columns naming every other input are read by
+    name too, in their order.
     """
     series = _is_series(x)
     if not (series or is_frame(x)):
@@ -798,8 +799,8 @@ def as_records(data: object, part: str = "ident", name: str = "data") -> list[Re
     return recs
 
 
-__all__ += ["check_units", "require_lengths", "as_records", "record_hint", "static_hint", "as_input_array", "frame_inputs", "is_frame", "check_compatible", "check_alike", "carried_from", "said_units", "check_units_agree", "check_same_units", "check_fitted_on", "check_period", "check_same_period", "check_one_period",
-            "static_point_inputs",
+__all__ += ["check_units", "require_lengths", "as_records", "record_hint", "static_hint", "as_input_array", "frame_inputs", "is_frame", "check_compatible", "check_alike", "carried_from", "said_units", "check_units_agree", "check_same_units", "check_fitted_on", "check_period", "check_same_period", "static_point_inputs",
+            "check_one_period",
             "PERIOD_RTOL"]
 
 
