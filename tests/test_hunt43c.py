@@ -286,6 +286,19 @@ def test_an_input_name_refused_says_what_names_may_be(name, why):
         gb.Record(np.ones((5, 2)), np.ones(5), input_names=(name, "q"))
 
 
+def test_input_names_from_a_numpy_array_are_plain_strings():
+    # input_names=np.array(["speed", "valve"]) (names kept in an .npz beside the samples) were kept as np.str_: every
+    # message and repr then said "(np.str_('speed'), np.str_('valve'))"
+    import graybox as gb
+    names = np.array(["speed", "valve"])
+    rec = gb.Record(np.ones((5, 2)), np.arange(5.0), input_names=names)
+    cand = gb.Candidates(1, 1, input_names=names)
+    points = gb.StaticPoints(np.eye(2), [1.0, 2.0], input_names=names)
+    for got in (rec.input_names, cand.input_names, points.input_names):
+        assert got == ("speed", "valve") and all(type(n) is str for n in got), got
+    assert "np.str_" not in repr(rec.input_names)
+
+
 def test_a_saved_dataset_says_the_units_any_of_its_parts_names(tmp_path):
     # was: the header took the ident record's units alone: ident read without units beside a validation file and
     # static points that name them gave a file that said none

@@ -174,7 +174,7 @@ def check_input_names(names: object, m: int | None = None, what: str = "input_na
         raise ValueError(f"{what}: input {dup[0]!r} is named twice in {out}")
     if m is not None and len(out) != m:
         raise ValueError(f"{what}: {len(out)} names {out} for {m} input column(s)")
-    return out
+    return tuple(str(n) for n in out)  # plain str: a numpy array's np.str_ printed as np.str_('speed') everywhere
 
 #: y(k) reads as lag 0, which Term refuses by name (lags start at 1), as it does y(k-0)
 _FACTOR_RE = re.compile(r"\s*([a-zA-Z]\w*)\s*\(\s*k\s*(?:-\s*(\d+)\s*)?\)\s*(?:\^\s*(\d+))?\s*\*?")
