@@ -163,6 +163,7 @@ def test_a_dataframe_of_inputs_holding_the_output_s_samples_is_refused_whatever_
     # the inputs alone, one input that is the output as a plain array (a test's Record(u, u)), and static points whose
     # few ȳ equal one input's levels (a unit gain) are taken
     assert gb.StaticPoints(df, df["p"].to_numpy()).n_inputs == 2
+    assert gb.StaticPoints(df, pd.Series(df["p"].to_numpy(), name="pressure")).n_inputs == 2  # named: by its name
     # an output held at a level an input is held at too (a record at rest) is no output passed as an input
     rest = pd.DataFrame({"valve": np.zeros(8), "speed": df["speed"]})
     assert gb.Record(rest, np.zeros(8)).n_inputs == 2

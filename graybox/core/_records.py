@@ -76,12 +76,12 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
     ``df.iloc[k]``) is read so by its index labels; one named as an input whose labels are none (a column,
     ``df["speed"]``) is that input's samples or levels, read as the one-column DataFrame it came from. Anything else is returned as it is. ``output``:
     the output: a named Series (:func:`output_series`), whose column (its name, its samples) no input may be, neither
-    a column of ``x`` nor ``x`` itself; or a record's output samples however given (array_like), which no column
-    of a frame of two or more may hold (one input passed as the output is a caller's own choice). Static points pass
-    only a named Series: a few ȳ may equal an input's levels by the plant's own law (a unit gain). ``steady``: ``x``
-    is steady-state levels, where the transient inputs among ``names`` rest at 0 and may be left out
-    (:func:`~graybox.core._transient.steady_levels` fills them in): columns naming every other input are read by
-    name too, in their order.
+    a column of ``x`` nor ``x`` itself; or a record's output samples given without a name (array_like), which no
+    column of a frame of two or more may hold (one input passed as the output is a caller's own choice). Static
+    points pass a named Series or None: a few ȳ may equal an input's levels by the plant's own law (a unit gain).
+    ``steady``: ``x`` is steady-state levels, where the transient inputs among ``names`` rest at 0 and may be left
+    out (:func:`~graybox.core._transient.steady_levels` fills them in): columns naming every other input are read
+    by name too, in their order.
     """
     series = _is_series(x)
     if not (series or is_frame(x)):
@@ -102,7 +102,7 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
             raise ValueError(f"{name}: the {what} {labels} hold {out!r}, {whose}: pass the input columns only, e.g. "
                              f"df.drop(columns={out!r}) or df[{rest!r}] (a time column is no input: give its step "
                              "as Ts=)")
-    if not series and output is not None and len(cols) > 1 and _varies(output):
+    if not series and named is None and output is not None and len(cols) > 1 and _varies(output):
         # the output's column under another name, y given as an array (df["p"].to_numpy(), np.loadtxt's column): no
         # name to tell it by, its samples do (where the output moves: one held where an input is held is a rest)
         same = [l for c, l in zip(cols, labels) if _same_samples(x[c], output)]
