@@ -115,6 +115,19 @@ def test_estimates_do_not_depend_on_the_order_the_records_are_listed(order, seed
         np.testing.assert_allclose(s2.theta, s1.theta, rtol=1e-8, atol=1e-12)
 
 
+def test_records_given_as_a_set_are_refused_as_having_no_order():
+    # a set of records was taken in its iteration order, which follows the records' addresses (Record hashes by
+    # identity): the GA's and output_error's seeded starts, the model's period and input names are the first
+    # record's, so se_pareto(..., seed=0) on {a, b} changed from one run to the next
+    recs = [gb.Record(*_plant(i, n), name=f"run {i}") for i, n in enumerate((200, 120))]
+    for data in (set(recs), frozenset(recs)):
+        for call in (lambda d: gb.cls(ST, d), lambda d: gb.frols(gb.Candidates(2, 2), d, n_terms=3)):
+            with pytest.raises(TypeError, match=r"data: an ordered sequence of records is needed, got a "
+                                                r"(frozen)?set.*pass a list"):
+                call(data)
+    assert len(gb.cls(ST, {"a": recs[0], "b": recs[1]}.values()).model.theta) == len(ST)  # a dict's are ordered
+
+
 # -- CLS, PE and SE covariances of a model that carries an MA part -------------------------------------------
 @pytest.mark.parametrize("which", ["se", "pe", "cls"])
 def test_a_gray_box_covariance_of_a_model_with_an_ma_part_says_so(which):

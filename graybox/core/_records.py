@@ -19,8 +19,8 @@ import numpy as np
 
 from ._reprs import listed, range_text
 from ._terms import check_input_names, default_input_names, transient_source
-from ._validation import (Relocked, as_1d_finite, locked, check_int, check_per_point, check_real, check_str,
-                          float_array, frozen_value, refuse_non_real, warn)
+from ._validation import (Relocked, as_1d_finite, locked, check_int, check_ordered, check_per_point, check_real,
+                          check_str, float_array, frozen_value, refuse_non_real, warn)
 
 __all__ = ["Record", "StaticPoints", "StaticRangeWarning", "warn_static_range"]
 
@@ -776,6 +776,9 @@ def as_records(data: object, part: str = "ident", name: str = "data") -> list[Re
     if isinstance(data, (str, bytes, Mapping, os.PathLike, np.ndarray)) or is_frame(data) or not hasattr(data, "__iter__"):
         raise TypeError(f"{name} must be a Record, a sequence of Records or a Dataset (whose {part} record is used); "
                         f"got {type(data).__name__}{record_hint(data)}")
+    # a set's order follows the records' addresses (a Record hashes by identity): seeded starts, the model's period
+    # and input names (the first record's) would change from one run to the next
+    check_ordered(data, name, "records")
     if iter(data) is data:  # type: ignore[call-overload]
         # a generator or an iterator is read once, and entries read their records more than once: frols or pe_pareto
         # then found it empty ("no records given") while els took it
