@@ -72,3 +72,19 @@ def test_records_that_disagree_among_several_are_named_by_their_positions():
     with pytest.raises(ValueError, match=r"^data: records 1 and 2 of 3: 'record' is sampled every 0\.1 s but "
                                          r"'record' every 0\.2 s"):
         gb.cls(["y(k-1)", "u(k-1)"], [recs[0], slow, recs[1]])
+
+
+def test_static_points_left_with_the_default_names_beside_named_records_are_told_to_name_them():
+    # StaticPoints(df[["speed", "valve"]], ȳ) reads the frame by position, names u1, u2: refused beside records of
+    # the inputs speed, valve with "… has inputs ('u1', 'u2')" and no word of how to name them
+    import pandas as pd
+
+    rng = np.random.default_rng(0)
+    rec = gb.Record(rng.uniform(size=(60, 2)), rng.uniform(size=60), input_names=("speed", "valve"))
+    points = gb.StaticPoints(pd.DataFrame({"speed": [0.1, 0.5, 0.9], "valve": [0.2, 0.2, 0.8]}), [1.0, 2.0, 3.0])
+    with pytest.raises(ValueError, match=r"has inputs \('u1', 'u2'\).*default names: name them, e\.g\. "
+                                         r"StaticPoints\(\.\.\., input_names=\('speed', 'valve'\)\)"):
+        gb.Dataset(rec, rec, points)
+    plain = gb.Record(rec.u, rec.y)
+    with pytest.raises(ValueError, match=r"e\.g\. Record\(\.\.\., input_names=\('speed', 'valve'\)\)"):
+        gb.cls(["y(k-1)", "speed(k-1)"], [rec, plain])

@@ -522,10 +522,24 @@ def check_compatible(a: object, b: object) -> None:
     records, the same sampling period (:func:`check_same_period`)."""
     if a.input_names != b.input_names:  # type: ignore[attr-defined]
         raise ValueError(f"{a.name!r} has inputs {a.input_names} but {b.name!r} has inputs {b.input_names}: "  # type: ignore[attr-defined]
-                         "all data of one identification must have the same inputs, in the same order")
+                         "all data of one identification must have the same inputs, in the same order"
+                         + _unnamed_hint(a, b))
     check_same_units(getattr(a, "units", ("", "")), f"{a.name!r} has", b, _SAME_UNITS)  # type: ignore[attr-defined]
     if isinstance(a, Record) and isinstance(b, Record):
         check_same_period(a, b)
+
+
+def _unnamed_hint(a: Any, b: Any) -> str:
+    """How to name the inputs of whichever of ``a`` and ``b`` (records, static points) left them with the default
+    names beside the other's own, as many (a DataFrame whose columns name no default is read by position)."""
+    for this, other in ((a, b), (b, a)):
+        n = len(this.input_names)
+        if (n == len(other.input_names) and this.input_names == default_input_names(n)
+                and other.input_names != default_input_names(n)):
+            kind = "StaticPoints" if isinstance(this, StaticPoints) else "Record"
+            return (f" ({this.name!r} has the default names: name them, e.g. {kind}(..., input_names="
+                    f"{tuple(other.input_names)!r}), one per column in the columns' order)")
+    return ""
 
 
 def check_units_agree(items: Sequence[object], advice: str) -> None:
