@@ -394,3 +394,20 @@ def test_a_vanishing_denominator_at_an_input_of_minus_zero_is_said_at_zero():
     rec = gb.Record(rng.uniform(-1, 1, 200), rng.normal(size=200))
     with pytest.raises(ValueError, match=r"does not exist at ū = \[0\.0\]"):
         gb.cls(s, rec, gb.StaticPoints(np.array([-0.0, 1.0]), np.array([1.0, 2.0])))
+
+
+def test_surface_cluster_map_of_a_model_reads_its_keys_in_the_models_input_order():
+    # a Model given as the structure: static_surface, static_surface_gain and surface_equilibria read its points in
+    # the model's input order (5103455), surface_cluster_map read its keys in the structure's: with input_names
+    # ('b', 'a') the key (p, m_b, m_a) = (0, 1, 0) was Σa there and Σb in model.cluster_map()
+    import graybox as gb
+
+    m = gb.Model(["y(k-1)*b(k-1)", "a(k-1)", "b(k-1)^2"], [0.5, 1.0, 0.1], input_names=("b", "a"))
+    cm = gb.surface_cluster_map(m)
+    assert cm.input_names == ("b", "a") == m.cluster_map().input_names
+    assert cm.names[cm.index((0, 0, 1))] == "Σa" and cm.names[cm.index((1, 1, 0))] == "Σyb"
+    sigma = cm.R @ m.theta
+    assert sigma[cm.index((0, 2, 0))] == 0.1 and sigma[cm.index((0, 0, 1))] == 1.0
+    # a Structure keeps its own order, and input_names given still win over the model's
+    assert gb.surface_cluster_map(m.structure).input_names == ("a", "b")
+    assert gb.surface_cluster_map(m, input_names=("a", "b")).input_names == ("a", "b")

@@ -187,16 +187,16 @@ def surface_cluster_map(structure: Structure, *, input_names: tuple[str, ...] | 
     Parameters
     ----------
     structure : Structure
-        Process terms.
+        Process terms (a Model, or a result that carries one, gives its structure).
     input_names : tuple of str, optional
-        The inputs in the order of the key powers (default: the structure's inputs).
+        The inputs in the order of the key powers (default: a model's own ``input_names``, as its
+        ``cluster_map()`` and the surface functions read them, else the structure's inputs).
 
     Returns
     -------
     SurfaceClusterMap
     """
-    names = input_names
-    structure = structure_of(structure)
+    structure, names = _model_inputs(structure, input_names)
     return _surface_cluster_map(structure, surface_inputs(structure, names))
 
 
