@@ -977,8 +977,10 @@ class GainBounds(StaticConstraint):
     Approximation: the gain is that of the model's static equation *along the reference curve*;
     it equals the model's own gain wherever the model's static curve passes through the
     reference (e.g. with :class:`CurveEquality` or :class:`PassesThrough`), and exactly
-    everywhere when no cluster mixes y and u (then G does not depend on ȳ). The error is
-    ``(ȳ_model − ȳ_ref) Σ_{yu^m} m ū^(m−1) / D`` for rational structures.
+    everywhere for a rational structure none of whose clusters mixes y and u (then neither G nor D
+    depends on ȳ). The error is ``(ȳ_model − ȳ_ref) Σ_{yu^m} m ū^(m−1) / D`` for rational
+    structures; with y to a power above 1, D depends on ȳ too, so the model's gain may leave the
+    bounds where its curve leaves the reference even when no cluster mixes y and u.
 
     Parameters
     ----------
