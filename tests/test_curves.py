@@ -105,3 +105,14 @@ def test_fitting_eq1_form_to_bundled_points_recovers_beta_alpha_kappa():
     se_curve = np.sqrt(np.einsum("ij,jk,ik->i", G, cov, G))
     assert np.all(np.abs(fit(grid) - reference.eq1(grid)) < 4 * se_curve)
     assert np.max(np.abs(fit(grid) - reference.eq1(grid))) < 0.1  # mlc: the curve itself is close
+
+
+def test_a_fit_on_two_levels_equal_to_round_off_names_them_not_an_input_far_from_zero():
+    # 0.1 * 3 and 0.3 are two levels to StaticPoints (they differ by 5.6e-17) and one to the fit: the quadratic on
+    # three points was refused as "powers of an input far from zero over a narrow range: express the input nearer
+    # zero", of levels in [0, 0.3]
+    pts = StaticPoints([0.0, 0.1 * 3, 0.3], [0.0, 1.0, 2.0])
+    with pytest.raises(ValueError, match=r"levels 0\.3 and 0\.30000000000000004, one level to round-off") as err:
+        StaticCurve.fit(pts, 2)
+    assert "nearer zero" not in str(err.value)
+    assert StaticCurve.fit(pts, 1).degree == 1  # two levels carry a line

@@ -159,9 +159,30 @@ def fit_on_powers(points: StaticPoints, powers, name: str | None = None) -> Stat
         # model's clusters Σ_{u^m}, is in powers of ū itself)
         lo, hi = float(points.ubar.min()), float(points.ubar.max())
         which = f"ū⁰ … ū^{degree}" if powers == list(range(degree + 1)) else f"ū^{powers}"
+        twins = _round_off_twins(points.ubar)
+        if twins:
+            # levels distinct to StaticPoints (0.1 * 3 and 0.3) and one to the fit: said as such, not as an input far
+            # from zero (levels in [0, 0.3] were told to be expressed nearer zero)
+            a, b = twins[0]
+            n_levels = points.ubar.size - len(twins)
+            raise ValueError(
+                f"StaticCurve.fit: {points.name} hold the levels {a!r} and {b!r}"
+                + (f" (and {len(twins) - 1} more such pair(s))" if len(twins) > 1 else "")
+                + f", one level to round-off: the fit has about {n_levels} distinct levels for the "
+                f"{len(powers)} powers {which}; give the level once (its ȳ averaged) or fit a lower degree"
+            ) from err
         raise ValueError(
             f"StaticCurve.fit: the powers {which} of {points.name} (ū in [{lo:.12g}, {hi:.12g}]) are collinear to "
             "round-off, as powers of an input far from zero over a narrow range are: express the input nearer zero "
             "(e.g. minus a reference level, in the records too) or fit a lower degree"
         ) from err
     return StaticCurve(c, (float(points.ubar.min()), float(points.ubar.max())), name or f"fit to {points.name}")
+
+
+def _round_off_twins(ubar: np.ndarray) -> list[tuple[float, float]]:
+    """Adjacent levels of ``ubar`` that differ by no more than the round-off of the levels themselves (a few hundred
+    eps of their magnitude: 0.1 * 3 and 0.3), in ascending order."""
+    u = np.sort(np.asarray(ubar, float))
+    gap = np.diff(u)
+    near = gap <= 256 * np.finfo(float).eps * np.maximum(np.abs(u[:-1]), np.abs(u[1:]))
+    return [(float(u[i]), float(u[i + 1])) for i in np.flatnonzero(near)]
