@@ -98,3 +98,14 @@ def test_bad_surfaces():
     with pytest.raises(ValueError, match="rank"):  # all points on a line: u1*u2, u1², u2² collinear
         t = np.linspace(0, 1, 10)
         StaticSurface.fit(_points(np.c_[t, t], t), 2)
+
+
+def test_surface_fit_counts_levels_equal_to_round_off_as_one():
+    # u1 at 0, 0.1 * 3 and 0.3: three levels to np.unique, two to the fit; its power 2 passed the levels check and the
+    # fit's rank test said "the inputs move together over them", of points on a grid
+    u1 = [0.0, 0.1 * 3, 0.3, 0.0, 0.1 * 3, 0.3, 0.0, 0.3]
+    u2 = [0.0, 0.0, 1.0, 1.0, 2.0, 2.0, 2.0, 0.0]
+    pts = StaticPoints(np.column_stack([u1, u2]), np.arange(8.0))
+    with pytest.raises(ValueError, match=r"input 'u1' at 2 levels, too few for its power 2"):
+        StaticSurface.fit(pts, 2)
+    assert StaticSurface.fit(pts, exponents=[(0, 0), (1, 0), (0, 1), (1, 1), (0, 2)]).degree == 2

@@ -11,7 +11,7 @@ from ..core._records import StaticPoints, outside_range
 from ..core._validation import Relocked, as_1d_finite, check_int, check_real, check_str, locked, real_array
 from ..core._reprs import exact_text, level_texts, listed, short_repr
 
-__all__ = ["StaticCurve", "fit_on_powers"]
+__all__ = ["StaticCurve", "fit_on_powers", "round_off_twins"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -159,7 +159,7 @@ def fit_on_powers(points: StaticPoints, powers, name: str | None = None) -> Stat
         # model's clusters Σ_{u^m}, is in powers of ū itself)
         lo, hi = float(points.ubar.min()), float(points.ubar.max())
         which = f"ū⁰ … ū^{degree}" if powers == list(range(degree + 1)) else f"ū^{powers}"
-        twins = _round_off_twins(points.ubar)
+        twins = round_off_twins(points.ubar)
         if twins:
             # levels distinct to StaticPoints (0.1 * 3 and 0.3) and one to the fit: said as such, not as an input far
             # from zero (levels in [0, 0.3] were told to be expressed nearer zero)
@@ -179,7 +179,7 @@ def fit_on_powers(points: StaticPoints, powers, name: str | None = None) -> Stat
     return StaticCurve(c, (float(points.ubar.min()), float(points.ubar.max())), name or f"fit to {points.name}")
 
 
-def _round_off_twins(ubar: np.ndarray) -> list[tuple[float, float]]:
+def round_off_twins(ubar: np.ndarray) -> list[tuple[float, float]]:
     """Adjacent levels of ``ubar`` that differ by no more than the round-off of the levels themselves (a few hundred
     eps of their magnitude: 0.1 * 3 and 0.3), in ascending order."""
     u = np.sort(np.asarray(ubar, float))

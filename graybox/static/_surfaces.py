@@ -13,6 +13,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
+from ._curves import round_off_twins
 from ..core._least_squares import scaled_lstsq
 from ..core._records import StaticPoints, frame_inputs, outside_range
 from ..core._terms import check_input_names
@@ -249,7 +250,10 @@ class StaticSurface(Relocked):
         # a power p of an input needs p + 1 levels of it (a 2 × 3 grid fits no u1²): said by name, before the fit,
         # whose rank test would name neither the input nor the power
         for i, n in enumerate(names):
-            levels, top = np.unique(ub[:, i]).size, max(e[i] for e in ex)
+            # levels apart by round-off (0.1 * 3 and 0.3) are one to the fit, whose rank test said "the inputs move
+            # together" of a grid
+            distinct = np.unique(ub[:, i])
+            levels, top = distinct.size - len(round_off_twins(distinct)), max(e[i] for e in ex)
             if top >= levels:
                 raise ValueError(f"StaticSurface.fit: the points hold input {n!r} at {levels} levels, too few for its "
                                  f"power {top} (a power p needs p + 1 levels): give points at more levels of {n!r}, a "
