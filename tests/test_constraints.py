@@ -391,3 +391,17 @@ def test_a_bound_far_beyond_the_fit_is_not_called_one_no_theta_meets():
     with pytest.raises(InfeasibleError, match=r"these constraints alone admit θ.*failed numerically") as info:
         cls(st, r, constraints=ClusterBounds({"Σ0": (None, -1e7)}))
     assert "admit no θ" not in str(info.value)
+
+
+def test_curve_equality_of_a_structure_with_transient_inputs_says_why_not_to_fit_a_surface():
+    # a curve for a structure with a transient input u_tau30 was refused with "give a StaticSurface (e.g.
+    # StaticSurface.fit(points))", which refuses the points (they hold u_tau30 at 0), and a surface in u_tau30 would
+    # switch its terms off (eq. (22) sets every cluster the surface lacks to zero)
+    s = Structure(["y(k-1)", "1", "u(k-1)", "u(k-1)^2", "u_tau30(k-1)"])
+    ctx = StaticContext(s, inputs=("u", "u_tau30"), sigma_y="free")
+    with pytest.raises(ValueError, match=r"transient input\(s\) \['u_tau30'\].*StaticBand") as err:
+        CurveEquality(EQ1).affine(ctx)
+    assert "StaticSurface.fit" not in str(err.value)
+    # a second input that is no transient one keeps the surface advice
+    with pytest.raises(ValueError, match=r"give a StaticSurface"):
+        CurveEquality(EQ1).affine(StaticContext(Structure(["y(k-1)", "u(k-1)", "v(k-1)"]), sigma_y="free"))

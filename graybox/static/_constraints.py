@@ -625,6 +625,16 @@ class CurveEquality(StaticConstraint):
                 )
             return lambda e: float(surf.coefficient(e))
         if m != 1:
+            inputs = cm.input_names if isinstance(cm, SurfaceClusterMap) else ()
+            transient = [n for n in inputs if transient_source(n, inputs) is not None]
+            if transient:
+                # the points hold them at 0, so no surface is fitted over them, and one in them would switch their
+                # terms off (every cluster the surface lacks set to zero): the remedy numerator_surface names
+                raise ValueError(
+                    f"{self.curve.name} is a curve in one input but the structure has {m} inputs, among them the "
+                    f"transient input(s) {transient} (zero at every steady state): eq. (22) would set their clusters "
+                    "to zero, switching them off. Keep the static function within the points' band instead "
+                    "(graybox.StaticBand), or use pe_pareto / se_pareto")
             raise ValueError(f"{self.curve.name} is a curve in one input but the structure has "
                              f"{m} inputs: give a StaticSurface (e.g. StaticSurface.fit(points))")
         c = self.curve.coefficients
