@@ -116,3 +116,17 @@ def test_a_fit_on_two_levels_equal_to_round_off_names_them_not_an_input_far_from
         StaticCurve.fit(pts, 2)
     assert "nearer zero" not in str(err.value)
     assert StaticCurve.fit(pts, 1).degree == 1  # two levels carry a line
+
+
+def test_check_domain_refuses_what_is_no_level_as_a_surfaces_does():
+    # StaticCurve.check_domain let NaN pass (NaN lies in no range, so it was outside none) and met text with numpy's
+    # UFuncTypeError; StaticSurface.check_domain refuses both by name
+    c = StaticCurve.polynomial([1.0, 2.0], domain=(0.0, 1.0))
+    with pytest.raises(ValueError, match="non-finite"):
+        c.check_domain([0.5, np.nan])
+    with pytest.raises(TypeError, match=r"ubar must be numbers"):
+        c.check_domain(["a"])
+    c.check_domain([0.0, 1.0])
+    with pytest.raises(ValueError, match=r"outside the domain \[0, 1\]"):
+        c.check_domain(2.0)
+    StaticCurve.polynomial([1.0]).check_domain([5.0])  # no domain: nothing to check, as a surface's

@@ -86,7 +86,7 @@ class StaticCurve(Relocked):
         if self.domain is None:
             return
         lo, hi = self.domain
-        ub = np.atleast_1d(ubar)
+        ub = np.atleast_1d(self._finite(ubar))  # NaN lies in no range, so it was outside none
         out = ub[outside_range(ub, lo, hi)]
         if out.size:
             # the ends told apart ([10000.01, 10000.05] read [10000, 10000], and ū = 10000.0 lay "outside" it)
@@ -106,12 +106,17 @@ class StaticCurve(Relocked):
     def _levels(self, ubar: object) -> np.ndarray:
         """``ubar`` as input levels: numbers (``TypeError``), finite and within the domain (``ValueError``): NaN
         lies in no range, so it passed the domain's check and came back as a NaN "value" of the curve."""
+        ub = self._finite(ubar)
+        self.check_domain(ub)
+        return ub
+
+    def _finite(self, ubar: object) -> np.ndarray:
+        """``ubar`` as numbers (``TypeError``), every one finite (``ValueError`` naming the first that is not)."""
         ub = real_array(ubar, "ubar", "input levels (numbers)")
         bad = ~np.isfinite(ub)
         if bad.any():
             raise ValueError(f"{self.name}: ubar has {int(bad.sum())} non-finite value(s) (NaN or inf), first at "
                              f"index {np.argwhere(bad)[0].tolist() if ub.ndim > 1 else int(np.flatnonzero(bad)[0])}")
-        self.check_domain(ub)
         return ub
 
     def points(self, ubar: np.ndarray, input_name: str = "u") -> StaticPoints:
