@@ -411,3 +411,20 @@ def test_surface_cluster_map_of_a_model_reads_its_keys_in_the_models_input_order
     # a Structure keeps its own order, and input_names given still win over the model's
     assert gb.surface_cluster_map(m.structure).input_names == ("a", "b")
     assert gb.surface_cluster_map(m, input_names=("a", "b")).input_names == ("a", "b")
+
+
+def test_surface_statics_at_a_point_whose_input_power_overflows_give_none_without_a_warning():
+    # the folded θ_t ū^a of u1(k-1)^2 at u1 = 1e200 is inf, and the cluster sums θ @ Rᵀ met inf · 0 outside any
+    # errstate: a RuntimeWarning ('invalid value encountered in matmul'), an error where warnings are, from
+    # equilibria and static_curve of a two-input model; one input at the same level gave [] and NaN quietly
+    import warnings
+
+    import graybox as gb
+
+    for terms in (["y(k-1)", "u1(k-1)^2", "u2(k-1)", "y(k-1)^2"], ["y(k-1)", "u1(k-1)^2", "u2(k-1)"]):
+        m = gb.Model(terms, [0.5, 1.0, 1.0, -1e-300][:len(terms)])
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            assert m.equilibria([1e200, 1.0]) == []
+            assert np.isnan(m.static_curve([[1e200, 1.0]], strict=False)).all()
+            assert m.static_curve([[1.0, 1.0]])[0] == pytest.approx(4.0, rel=1e-12)  # (1 + 1) / 0.5

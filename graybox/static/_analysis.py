@@ -281,7 +281,8 @@ def _static_terms(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) ->
     cm = cluster_map(structure)
     th = np.atleast_2d(np.asarray(thetas, float))
     ub = np.asarray(ubar, float)
-    sig = th @ cm.R.T
+    with np.errstate(all="ignore"):  # a surface's folded θ_t ū^a beyond the float range (inf · 0 in the sums): no root
+        sig = th @ cm.R.T
     D = max(cm.max_y_power, 1)
     coef = np.zeros((D + 1, th.shape[0], ub.size))
     size = np.zeros_like(coef)
@@ -802,7 +803,8 @@ def is_rational(structure: Structure) -> bool:
 def _rational_terms(structure: Structure, thetas: np.ndarray, ubar: np.ndarray):
     cm = cluster_map(structure)
     th = np.asarray(thetas, dtype=float)
-    sig = th @ cm.R.T  # (C,) or (P, C)
+    with np.errstate(all="ignore"):  # as in _static_terms: a folded θ beyond the float range leaves no equilibrium
+        sig = th @ cm.R.T  # (C,) or (P, C)
     ub = np.asarray(ubar, dtype=float)
     num = np.zeros(sig.shape[:-1] + ub.shape)
     den = np.ones_like(num)
