@@ -428,3 +428,19 @@ def test_surface_statics_at_a_point_whose_input_power_overflows_give_none_withou
             assert m.equilibria([1e200, 1.0]) == []
             assert np.isnan(m.static_curve([[1e200, 1.0]], strict=False)).all()
             assert m.static_curve([[1.0, 1.0]])[0] == pytest.approx(4.0, rel=1e-12)  # (1 + 1) / 0.5
+
+
+def test_surface_statics_where_a_folded_parameter_overflows_give_none_without_a_warning():
+    # θ_t = 1e200 on u1(k-1)^3 at u1 = 1e50: ū^a is finite (1e150), θ_t ū^a is not, and the product was taken outside
+    # any errstate ('overflow encountered in multiply', an error where warnings are)
+    import warnings
+
+    import graybox as gb
+
+    m = gb.Model(["y(k-1)", "u1(k-1)^3", "u2(k-1)"], [0.5, 1e200, 1.0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert m.equilibria([1e50, 1.0]) == []
+        assert np.isnan(m.static_curve([[1e50, 1.0]], strict=False)).all()
+        assert np.isnan(m.static_gain([[1e50, 1.0]], strict=False)).all()
+        assert m.static_curve([[0.0, 1.0]])[0] == pytest.approx(2.0, rel=1e-12)

@@ -246,7 +246,8 @@ def _folded(structure: Structure, thetas: np.ndarray, ub: np.ndarray, inputs: tu
     """The skeleton structure and θ'[p, j, t] = θ_pt g_t(ū_j), shape (P, M, n_terms)."""
     sk = _skeleton(structure)
     g = input_monomials(structure, ub, inputs)
-    return sk, np.atleast_2d(np.asarray(thetas, float))[:, None, :] * g[None, :, :]
+    with np.errstate(all="ignore"):  # θ_t ū^a beyond the float range: inf, a point with no float equilibrium
+        return sk, np.atleast_2d(np.asarray(thetas, float))[:, None, :] * g[None, :, :]
 
 
 def surface_equilibria(structure: Structure, theta: np.ndarray, ubar: np.ndarray, *,
