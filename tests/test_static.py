@@ -444,3 +444,12 @@ def test_surface_statics_where_a_folded_parameter_overflows_give_none_without_a_
         assert np.isnan(m.static_curve([[1e50, 1.0]], strict=False)).all()
         assert np.isnan(m.static_gain([[1e50, 1.0]], strict=False)).all()
         assert m.static_curve([[0.0, 1.0]])[0] == pytest.approx(2.0, rel=1e-12)
+
+
+def test_an_equilibrium_beyond_the_float_range_is_not_said_to_be_no_root_at_all():
+    # y = 0.5 y + u at ū = 1e308 has its equilibrium at 2e308, past the largest float: the refusal said "the static
+    # equation has no real root", which it has (hunt59b)
+    m = Model(["y(k-1)", "u(k-1)"], [0.5, 1.0])
+    assert m.equilibria(1e308) == [] and m.equilibria(1e307)[0].ybar == pytest.approx(2e307)
+    with pytest.raises(ValueError, match="no real root within the float range"):
+        m.static_curve([1e308])

@@ -897,7 +897,8 @@ def rational_static_curve(structure: Structure, theta: np.ndarray, ubar: np.ndar
 NO_EQUILIBRIUM, NONE_STABLE, CONTINUUM = 1, 2, 5
 #: Why a point has no equilibrium, in words: no real root of eq. (5), or (rational form) a vanishing
 #: denominator whose numerator does not vanish (where it does too, every output is one: CONTINUUM).
-NO_EQUILIBRIUM_WHY = "no equilibrium (the static equation has no real root, or its denominator vanishes)"
+NO_EQUILIBRIUM_WHY = ("no equilibrium (the static equation has no real root within the float range, or its denominator "
+                      "vanishes)")
 #: Why a point has every output as an equilibrium (:func:`continuum`), in words.
 CONTINUUM_WHY = ("a continuum of equilibria: the static equation holds for every output level, so ȳ is not set by ū "
                  "(an integrator at its balancing input: the output stays where it starts, a marginally stable "
