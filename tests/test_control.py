@@ -605,3 +605,24 @@ def test_narx_initial_state_takes_the_period_narx_iosystem_was_given_over_a_one_
     with pytest.raises(ValueError, match=r"identified at Ts = 0.05 s"):
         gb.narx_initial_state(at_real, one, Ts=1.0)
     np.testing.assert_array_equal(gb.narx_initial_state(at_real, real, Ts=0.05), gb.narx_initial_state(at_real, real))
+
+
+def test_a_given_period_that_the_data_contradict_is_refused():
+    # Ts= was checked against the model's period only: a hand-written model (no Ts) with its records at 0.05 s and
+    # Ts=50 (meant as ms) gave τ = 72 s, a thousand times too long, and a model at 0.05 s with data at 0.1 s, refused
+    # without Ts=, was taken with Ts=0.05 (hunt59a)
+    rng = np.random.default_rng(5)
+    u, y = rng.uniform(0.5, 2.0, 40), rng.uniform(0.0, 1.0, 40)
+    hand = Model(["1", "y(k-1)", "u(k-1)"], [0.3, 0.5, 0.4], name="hand")
+    at_005 = dataclasses.replace(hand, Ts=0.05)
+    fast, slow, one = gb.Record(u, y, Ts=0.05), gb.Record(u, y, Ts=0.1), gb.Record(u, y)
+    for model, data in ((hand, fast), (hand, [fast, fast]), (at_005, slow)):
+        for f in (gb.local_model, gb.operating_curve):
+            with pytest.raises(ValueError, match=r"every (50|0.05) s but 'record' every (0.05|0.1) s"):
+                f(model, 1.0, Ts=50 if model is hand else 0.05, data=data)
+    # the data at the period given, or made without Ts= (1 s, relabelled by Ts= as a model's 1 s is), are taken
+    lm = gb.local_model(hand, 1.0, Ts=0.05, data=fast)
+    assert lm.Ts == 0.05 and lm.time_constant == pytest.approx(-0.05 / np.log(0.5), rel=1e-12)
+    assert gb.local_model(hand, 1.0, Ts=0.05, data=one).Ts == 0.05
+    assert gb.local_model(dataclasses.replace(hand, Ts=1.0), 1.0, Ts=0.05, data=gb.Dataset(one, one)).Ts == 0.05
+    assert gb.local_model(at_005, 1.0, Ts=0.05, data=fast).Ts == 0.05

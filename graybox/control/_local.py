@@ -28,7 +28,8 @@ from typing import Any, ClassVar, Sequence
 
 import numpy as np
 
-from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, as_records, check_same_units, check_units, frame_inputs, labelled_point, outside_range,
+from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, as_records, check_period,
+                              check_same_units, check_units, frame_inputs, labelled_point, outside_range,
                               rounded_levels, static_point_inputs)
 from ..core._terms import Structure, check_input_names
 from ..core._transient import steady_levels
@@ -659,11 +660,12 @@ def _range_warning(model: Model, ub: np.ndarray, data: object) -> None:
 
 def check_Ts(Ts: float | None, data: object, model: Model, takes_data: bool = True) -> float:
     """The sampling period of a model's linear or nonlinear systems: ``Ts``, else the one the model was identified
-    at (``data`` at another period is refused: its coefficients hold at its own), else ``data``'s. ``takes_data``:
-    whether the caller has a ``data=`` to suggest."""
+    at (``data`` at another period is refused: its coefficients hold at its own), else ``data``'s; ``data`` at another
+    period than a ``Ts`` given is refused too, but records made without ``Ts=`` (1 s). ``takes_data``: whether the
+    caller has a ``data=`` to suggest."""
+    # records (a Dataset's, or a sequence of them, which share one period); static points have none
+    recs = None if data is None or isinstance(data, StaticPoints) else as_records(data)
     if Ts is None:
-        # records (a Dataset's, or a sequence of them, which share one period); static points have none
-        recs = None if data is None or isinstance(data, StaticPoints) else as_records(data)
         if model.Ts is not None:
             if recs is not None:
                 model.check_period(recs[0])
@@ -676,10 +678,18 @@ def check_Ts(Ts: float | None, data: object, model: Model, takes_data: bool = Tr
     # models are then asked for at the real one); a model identified at another period is refused: its coefficients
     # hold per step of that period (Ts=50 meant as 50 ms beside a 0.05 s model gave τ 1000 times too long)
     Ts = check_real(Ts, "Ts", low=0, low_open=True)
-    if model.Ts is not None and model.Ts != 1.0 and abs(Ts - model.Ts) > 1e-9 * model.Ts:
+    known = model.Ts is not None and model.Ts != 1.0
+    if known and abs(Ts - model.Ts) > 1e-9 * model.Ts:
         raise ValueError(f"Ts = {Ts:g} s, but model {model.name!r} was identified at Ts = {model.Ts:g} s, the period its "
                          "coefficients hold per step of: leave Ts= out (seconds, the model's own is taken), or, if the "
                          "model's period is wrong, give the model its own: dataclasses.replace(model, Ts=...)")
+    # the data the model was identified on say its period too: a Ts= they contradict (50 meant as ms beside records
+    # at 0.05 s) is refused as the model's own is; records made without Ts= (1 s) are relabelled by it, as its 1 s is
+    if recs is not None and known:
+        model.check_period(recs[0])
+    elif recs is not None and recs[0].Ts != 1.0:
+        check_period(Ts, f"Ts = {Ts:.9g} s was given: the model runs", recs[0],
+                     "; leave Ts= out to take the data's period")
     return Ts
 
 
@@ -740,7 +750,8 @@ def local_model(model: Model, ubar: float | Sequence[float] | np.ndarray, *, Ts:
     Ts : float, optional
         Sampling period (s); default the model's own (``model.Ts``, the period it was identified at;
         ``data`` at another period is refused, and so is a ``Ts`` other than a model's own but for its 1 s, the
-        period of records made without ``Ts=``), else ``data``'s.
+        period of records made without ``Ts=``), else ``data``'s. ``data`` at another period than a ``Ts`` given is
+        refused too, but for records made without ``Ts=`` (1 s).
     y0 : float, optional
         Initial output of the settling run that picks the equilibrium (output units), e.g. the
         measured ȳ; needed when several equilibria are stable, and where every ȳ is an equilibrium
@@ -966,7 +977,8 @@ def operating_curve(model: Model, ubar: Sequence[float] | np.ndarray, *, Ts: flo
     Ts : float, optional
         Sampling period (s); default the model's own (``model.Ts``, the period it was identified at;
         ``data`` at another period is refused, and so is a ``Ts`` other than a model's own but for its 1 s, the
-        period of records made without ``Ts=``), else ``data``'s.
+        period of records made without ``Ts=``), else ``data``'s. ``data`` at another period than a ``Ts`` given is
+        refused too, but for records made without ``Ts=`` (1 s).
     y0 : float or array_like of shape (M,), optional
         Initial output of each point's settling run (see :func:`local_model`). Without it a point
         where the model has several stable equilibria gets the status ``"several stable equilibria"``
