@@ -327,6 +327,21 @@ def test_python_control_missing_names_the_extra(monkeypatch):
             call()
 
 
+def test_python_control_too_old_names_the_version_it_needs(monkeypatch):
+    # python-control 0.9 (still a distribution's package) has no nlsys: narx_iosystem failed with "module 'control'
+    # has no attribute 'nlsys'", naming neither the version found nor the one needed (hunt59a)
+    import types
+
+    lm = gb.local_model(reference.paper_model(15), 1200.0, Ts=0.05)
+    old = types.ModuleType("control")
+    old.__version__ = "0.9.4"
+    old.ss, old.tf = ct.ss, ct.tf  # 0.9 has these, not nlsys
+    monkeypatch.setitem(sys.modules, "control", old)
+    for call in (lm.to_statespace, lm.to_transfer_function, lambda: gb.narx_iosystem(reference.paper_model(15))):
+        with pytest.raises(ImportError, match=r"python-control 0\.10 or later.*0\.9\.4.*pip install"):
+            call()
+
+
 def test_neural_model_gets_a_clear_error():
     net = gb.NeuralModel(np.zeros((2, 2)), np.zeros(2), np.zeros(2), 0.0, ny=1, nu=1)
     for fn in (lambda: gb.local_model(net, 1.0, Ts=1.0), lambda: gb.operating_curve(net, [1.0], Ts=1.0),

@@ -22,6 +22,7 @@ Then
 
 from __future__ import annotations
 
+import re
 import warnings
 from dataclasses import dataclass
 from typing import Any, ClassVar, Sequence
@@ -490,12 +491,23 @@ CONTROL_EXTRA = ("pip install graybox[control] (quoted in zsh: 'graybox[control]
                  "'.[control]', or the package itself: pip install control")
 
 
+#: The oldest python-control the bridge runs on (the extra's pin): 0.10 brought ``control.nlsys``.
+CONTROL_MIN = (0, 10)
+
+
 def require_control() -> Any:
-    """python-control, or an ``ImportError`` naming the extra to install."""
+    """python-control, or an ``ImportError`` naming the extra to install (or to upgrade, for one older than
+    :data:`CONTROL_MIN`)."""
     try:
         import control
     except ImportError as exc:
         raise ImportError(f"this needs python-control (the 'control' extra): {CONTROL_EXTRA}") from exc
+    # an older one (a distribution's package, 0.9) failed later with "module 'control' has no attribute 'nlsys'"
+    version = str(getattr(control, "__version__", ""))
+    parts = tuple(int(p) for p in re.findall(r"\d+", version)[:2])
+    if len(parts) == 2 and parts < CONTROL_MIN:
+        raise ImportError(f"this needs python-control {CONTROL_MIN[0]}.{CONTROL_MIN[1]} or later (the 'control' "
+                          f"extra), found {version}: upgrade it, {CONTROL_EXTRA.replace('pip install', 'pip install -U')}")
     return control
 
 
