@@ -641,3 +641,28 @@ def test_a_given_period_that_the_data_contradict_is_refused():
     assert gb.local_model(hand, 1.0, Ts=0.05, data=one).Ts == 0.05
     assert gb.local_model(dataclasses.replace(hand, Ts=1.0), 1.0, Ts=0.05, data=gb.Dataset(one, one)).Ts == 0.05
     assert gb.local_model(at_005, 1.0, Ts=0.05, data=fast).Ts == 0.05
+
+
+def _settling_by_hand(a: list[float], b: float, band: float, n: int) -> float:
+    """The 2-pole, 1-lag step response s(k) = g + Σ c_i p_i^k (k >= 1), c_i from s(1) and s(2): the last sample
+    outside the band, plus one."""
+    p = np.roots([1.0, -a[0], -a[1]])
+    g = b / (1.0 - sum(a))
+    s1, s2 = b, a[0] * b + b
+    c = np.linalg.solve(np.array([p, p ** 2]), np.array([s1 - g, s2 - g]))
+    k = np.arange(1, n)
+    err = np.abs(np.real(c[0] * p[0] ** k + c[1] * p[1] ** k))
+    return float(k[np.flatnonzero(err > band * abs(g))[-1]] + 1)
+
+
+def test_settling_time_is_not_held_up_by_the_round_off_of_the_step_response():
+    # the step response was run to its final value and compared with g: where 1 − Σa is small its floating-point
+    # limit sits off g by eps / (1 − Σa), and a band under a thousand times that never 'settled'. a = (1.5, −0.5001):
+    # the 1e-9 band, entered for good after 103566 samples, gave inf; y(k) = 0.3 y(k-1) + 0.7 u(k-1) with the band 1e-16 gave
+    # the end of the window run, 41 samples for 31 (hunt59a)
+    slow = gb.LocalModel(np.array([0.0]), 0.0, "reached", "", np.array([1.5, -0.5001]), np.array([[0.3]]), 1.0, ("u",))
+    for band in (1e-6, 1e-9, 1e-12):
+        assert slow.settling_time(band=band) == _settling_by_hand([1.5, -0.5001], 0.3, band, 400_000)
+    fast = gb.LocalModel(np.array([0.0]), 0.0, "reached", "", np.array([0.3]), np.array([[0.7]]), 1.0, ("u",))
+    for band in (0.02, 1e-6, 1e-12, 1e-16, 1e-17):  # the first k with 0.3^k <= band
+        assert fast.settling_time(band=band) == np.ceil(np.log(band) / np.log(0.3))

@@ -69,16 +69,20 @@ def _step_error(num: np.ndarray, den: np.ndarray, g: float, band: float, n: int,
                 ) -> tuple[int, float, float, float]:
     """Over a unit step response of n samples (the filter num/den from rest, run in blocks): the number of
     samples after which it stays within ``band`` of g (the last sample outside it, plus one), the largest error
-    |s − g| over the first and over the second half of the last ``tail`` samples, and over all."""
+    |s − g| over the first and over the second half of the last ``tail`` samples, and over all.
+
+    The error s − g is run itself, as the response to the input stepping off from its steady state (at 1): the
+    response run to its final value and compared with g settles on the recursion's round-off, eps / (1 − Σa) of g,
+    and a band under a thousand times that never settled; the error's own recursion decays to 0."""
     block = 1 << 20
-    zi = np.zeros(max(len(num), len(den)) - 1)
+    from scipy.signal import lfilter, lfilter_zi  # slow to import: loaded where used
+    zi = -lfilter_zi(num, den)  # s(k) − g = −(the response to 1 for k < 0, off from k = 0)
     last, early, late, peak = 0, 0.0, 0.0, 0.0
     mid = n - tail // 2
-    from scipy.signal import lfilter  # slow to import: loaded where used
     for k0 in range(0, n, block):
         k1 = min(n, k0 + block)
-        s, zi = lfilter(num, den, np.ones(k1 - k0), zi=zi)
-        err = np.abs(s - g)
+        e, zi = lfilter(num, den, np.zeros(k1 - k0), zi=zi)
+        err = np.abs(e)
         out = np.flatnonzero(err > band * abs(g))
         if out.size:
             last = k0 + int(out[-1]) + 1
