@@ -111,11 +111,12 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--cases", default="", help="comma-separated case names (default: all)")
     ap.add_argument("--tank-draws", type=int, default=3, help="draws of the cascaded tanks (bench_honest's the first)")
+    ap.add_argument("--blocks", type=int, default=None, help="select_graybox's blocks= (default: its own, 5)")
     ap.add_argument("--synthetic-draws", type=int, default=1, help="draws of each synthetic case (likewise)")
     args = ap.parse_args()
     names = [c for c in args.cases.split(",") if c]
-    print(f"# bench_rule ({datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC, git {git_rev()}): "
-          f"{machine()}", flush=True)
+    print(f"# bench_rule ({datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC, git {git_rev()}, "
+          f"blocks={args.blocks}): {machine()}", flush=True)
     warnings.simplefilter("ignore")
     cases = bench_honest.cases()
     for k in range(1, args.tank_draws):
@@ -130,7 +131,7 @@ def main() -> None:
         sel = {}
         for box, b in (("gray", band), ("black", np.inf)):
             CAUGHT.clear()
-            g = gb.select_graybox(cand, data, band=b, test=test, executor="processes", workers=2)
+            g = gb.select_graybox(cand, data, band=b, test=test, executor="processes", workers=2, blocks=args.blocks)
             cap = CAUGHT[-1]
             cap["library"] = f"{g.chosen['n_terms']} {g.chosen['estimator']}"
             t = cap["table"].set_index("estimator", append=True)
