@@ -58,8 +58,9 @@ nb_merge_streams = True
 
 # --- the API reference, written from the public names --------------------------------------------
 #: Public subpackages in the reference, in layer order (top-level names are re-exports of these).
-API_PACKAGES = [unit for unit, _, _ in LAYERS if not unit.startswith("_") and unit not in ("reference",
-                                                                                           "reproduce")]
+#: ``reproduce`` is the command ``graybox reproduce``; ``reference`` (the paper's tables and models, which the README
+#: sends readers to) is data a user reads.
+API_PACKAGES = [unit for unit, _, _ in LAYERS if not unit.startswith("_") and unit != "reproduce"]
 OWNS = {unit: owns for unit, _, owns in LAYERS}
 
 
@@ -122,8 +123,8 @@ def _data_doc(unit: str, name: str, obj: object) -> list[str]:
     """The ``#:`` comment of a public constant, read from the private module that defines it."""
     from sphinx.pycode import ModuleAnalyzer
 
-    for module in dict((u, m) for u, m, _ in LAYERS)[unit]:
-        full = f"graybox.{unit}.{module}"
+    # a subpackage's private modules, or the module itself when it has none (graybox.reference)
+    for full in [f"graybox.{unit}.{m}" for m in dict((u, m) for u, m, _ in LAYERS)[unit]] or [f"graybox.{unit}"]:
         if getattr(importlib.import_module(full), name, None) is obj:
             doc = ModuleAnalyzer.for_module(full).find_attr_docs().get(("", name))
             if doc:

@@ -79,6 +79,7 @@ TABLE_I: Mapping[str, Mapping[str, float]] = frozen_value({
     }.items()
 }, "TABLE_I")  # read-only, as the tables below: the paper's figures are no one's to edit
 
+#: The 17 process terms of the paper's eq. (15) (degree 2, ℓ = 2), in Table II's row order.
 STRUCTURE_15 = Structure(
     [
         "y(k-1)", "y(k-4)", "u(k-4)u(k-6)", "y(k-2)", "u(k-2)y(k-6)", "u(k-2)y(k-5)", "u(k-2)y(k-1)",
@@ -100,6 +101,7 @@ _II = {
            -1.5104, -8.3407, -0.5735, -9.9186, 0.0097, 1.1591],
 }
 
+#: The 23 process terms of the paper's eq. (17) (degree 3, ℓ = 3), in Table III's row order.
 STRUCTURE_17 = Structure(
     [
         "y(k-1)", "u(k-6)^2u(k-4)", "y(k-4)", "u(k-4)u(k-2)", "y(k-2)", "y(k-3)", "y(k-6)", "y(k-5)",
@@ -125,9 +127,12 @@ _III = {
            -6.5877],
 }
 
-#: θ of each printed column, engineering units. Read-only (mappings and arrays): an in-place edit of a writeable
-#: table (``th = TABLE_II["ELS"]; th *= 2``) changed every later :func:`paper_model`.
+#: θ of each printed column of Table II (eq. (15): ELS, CLS, PE, SE), engineering units, in :data:`STRUCTURE_15`'s
+#: order. Read-only (mappings and arrays): an in-place edit of a writeable table (``th = TABLE_II["ELS"]; th *= 2``)
+#: changed every later :func:`paper_model`.
 TABLE_II: Mapping[str, np.ndarray] = frozen_value({k: np.array(v) * _SCALE_II for k, v in _II.items()}, "TABLE_II")
+#: θ of each printed column of Table III (eq. (17): ELS, PE, SE), engineering units, in :data:`STRUCTURE_17`'s
+#: order; read-only as :data:`TABLE_II`.
 TABLE_III: Mapping[str, np.ndarray] = frozen_value({k: np.array(v) * _SCALE_III for k, v in _III.items()}, "TABLE_III")
 
 #: Columns whose printed values are known not to describe the plant (kept for the record only).

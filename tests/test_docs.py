@@ -7,6 +7,7 @@ its execution produced (figures included).
 
 from __future__ import annotations
 
+import importlib
 import json
 import re
 from pathlib import Path
@@ -44,6 +45,22 @@ def test_every_public_name_has_a_reference_entry(site):
     assert exported <= anchors, f"not in the API reference: {sorted(exported - anchors)}"
     for sub in ("plots", "experiments"):
         assert set(getattr(gb, sub).__all__) <= anchors, sub
+    # every public subpackage has its page, with each of its names under it: graybox.reference (the paper's
+    # tables and models, which the README sends readers to: reference.paper_model, reference.TS) had none.
+    # reproduce is the command `graybox reproduce`, not a library a user calls.
+    from graybox._layers import LAYERS
+
+    for unit in (u for u, _, _ in LAYERS if not u.startswith("_") and u != "reproduce"):
+        page = site / "api" / f"{unit}.html"
+        assert page.exists(), f"graybox.{unit} has no API page"
+        text = page.read_text(encoding="utf-8")
+        here = set(re.findall(rf'id="graybox\.{unit}\.(\w+)"', text))
+        missing = set(importlib.import_module(f"graybox.{unit}").__all__) - here
+        assert not missing, f"graybox.{unit}: not on its API page: {sorted(missing)}"
+        # a constant is described by its #: comment, not shown as its bare name
+        data = r'<dl class="py data">\s*<dt[^>]*id="graybox\.[\w.]*?(\w+)".*?</dt>\s*<dd>(.*?)</dd>'
+        for name, body in re.findall(data, text, re.S):
+            assert re.sub(r"<[^>]+>|\s", "", body) != name, f"graybox.{unit}.{name}: no description"
     # each anchor names its module once (a constant's was "graybox.datasets.graybox.datasets.BUCK_STATIC_CURVE")
     doubled = re.findall(r'id="(graybox\.[\w.]*graybox\.[\w.]+)"', pages)
     assert not doubled, doubled[:3]

@@ -2,6 +2,8 @@
 
 __all__ = ["EXAMPLE_SPEC"]
 
+#: The TOML text ``graybox grid init`` prints: a commented grid for the bundled pumping plant, to edit and run with
+#: ``graybox grid run`` (from Python: ``Grid.from_toml_text(EXAMPLE_SPEC)``).
 EXAMPLE_SPEC = '''\
 # A graybox grid: data sets x structures x variants x seeds.
 #   graybox grid run spec.toml --store results.sqlite [--workers N | --scheduler ADDRESS]
