@@ -83,3 +83,23 @@ def test_user_guide_pages_exist(site):
     for page in ("method", "experiment_design", "black_box", "gray_box", "selection", "trust", "several_inputs", "long_records",
                  "experiments", "control"):
         assert (site / "guide" / f"{page}.html").exists(), page
+
+
+def test_ebic_is_described_as_information_criterion_computes_it():
+    """EBIC adds 2 ln C(p, k) to BIC (Chen & Chen's extended BIC, γ = 1), as the guide said; the README and
+    information_criterion's docstring said it adds "the logarithm of the number of subsets", half of it."""
+    import math
+
+    import numpy as np
+
+    import graybox as gb
+
+    rss, n_rows, p = np.array([9.0, 5.0, 4.0, 3.5]), 200, 12
+    extra = gb.information_criterion("ebic", rss, n_rows, n_candidates=p) - gb.information_criterion("bic", rss, n_rows)
+    np.testing.assert_allclose(extra, [2 * math.log(math.comb(p, k)) for k in (1, 2, 3, 4)], rtol=1e-12)
+    texts = {"README.md": (ROOT / "README.md").read_text(encoding="utf-8"),
+             "selection.md": (ROOT / "docs" / "guide" / "selection.md").read_text(encoding="utf-8"),
+             "information_criterion": gb.information_criterion.__doc__}
+    for where, text in texts.items():
+        for said in re.finditer(r"(\w+)\s+the\s+logarithm\s+of\s+the\s+number\s+of\s+subsets", text):
+            assert said.group(1) == "twice", f"{where}: {said.group(0)!r}"

@@ -150,7 +150,7 @@ def information_criterion(name: str, rss: np.ndarray, n_rows: int, *, n_candidat
         With σ²_k = rss_k / N: ``N ln σ² + 2k`` (AIC), ``N ln σ² + k ln N`` (BIC),
         ``N ln σ² + N ln((N + k)/(N − k))`` (FPE, in its logarithmic form as in SysIdentPy),
         ``N ln σ² + k ln N + 2 ln C(p, k − n_included)`` (EBIC, the extended BIC of Chen & Chen
-        (2008) with γ = 1: BIC plus the logarithm of the number of subsets of that size the
+        (2008) with γ = 1: BIC plus twice the logarithm of the number of subsets of that size the
         selection compared, so a size is not chosen because the best of many subsets fits the
         record's noise).
 
