@@ -500,7 +500,7 @@ def two_speed_reference(*, n_samples: int = N_SAMPLES_MISO, n_ident: int = N_IDE
                         low: float = OPERATING_RANGE[0], high: float = OPERATING_RANGE[1]) -> np.ndarray:
     """Two independent staircase speed references (rpm), shape (n_samples, 2).
 
-    Each column is designed like the bundled rig's reference (:func:`graybox.datasets.pumping.speed_reference`:
+    Each column is designed like the bundled rig's reference (:func:`graybox.datasets.speed_reference`:
     holds of 4–9 s, or longer where a hold forced to an end merges with a neighbour, steps of several sizes,
     levels on whole multiples of 10 rpm, both ends of
     [``low``, ``high``] visited in the identification part ``:n_ident`` and in the validation
@@ -543,7 +543,7 @@ def static_grid_experiment(
 ) -> StaticPoints:
     """The static test over (n₁, n₂): hold each pair, wait out the transients, average the pressure.
 
-    As :func:`graybox.datasets.pumping.static_experiment`, one continuous run visiting ``speeds``
+    As :func:`graybox.datasets.static_experiment`, one continuous run visiting ``speeds``
     in order (default ``static_grid``), discarding ``settle`` seconds and averaging the next
     ``average`` seconds of noisy measurements at each pair (``speeds``: shape (K, 2), a DataFrame with
     columns ``u1`` and ``u2`` read by name, as :meth:`TwoSpeedPumpingPlant.simulate` reads ``u``); ``seed`` (an int
