@@ -43,14 +43,36 @@ EQ1_COEFFICIENTS = (-1.3312, 1.4933e-3, 7.2652e-6)
 
 
 def eq1(u: np.ndarray) -> np.ndarray:
-    """The plant's measured static curve, eq. (1), in mlc for u in rpm."""
+    """The plant's measured static curve, eq. (1), in mlc for u in rpm.
+
+    Parameters
+    ----------
+    u : float or ndarray
+        Pump speeds (rpm), any shape.
+
+    Returns
+    -------
+    ndarray
+        H(u) = β u² + α u + κ (mlc), the shape of ``u`` (:data:`EQ1_COEFFICIENTS`).
+    """
     k, a, b = EQ1_COEFFICIENTS
     u = real_array(u, "u")  # a masked entry is no speed (its fill value is no sample)
     return b * u**2 + a * u + k
 
 
 def eq1_points(ubar: np.ndarray | None = None) -> StaticPoints:
-    """Eq. (1) sampled at ū = 750, 850, …, 1650 rpm (or at ``ubar``)."""
+    """Eq. (1) sampled at ū = 750, 850, …, 1650 rpm (or at ``ubar``).
+
+    Parameters
+    ----------
+    ubar : float or ndarray of shape (M,), optional
+        Speeds (rpm) to sample the curve at (default the ten above).
+
+    Returns
+    -------
+    StaticPoints
+        ū (rpm) and ȳ = :func:`eq1` (ū) (mlc), shape (M,), named ``"eq. (1)"``; no uncertainty.
+    """
     ub = np.arange(750.0, 1651.0, 100.0) if ubar is None else real_array(ubar, "ubar")
     if ub.ndim > 1:  # speeds of the one input: said of ubar, not of the curve's values at them
         raise ValueError(f"ubar must be 1-D (speeds, rpm), got shape {ub.shape}")

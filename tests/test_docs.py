@@ -117,3 +117,29 @@ def test_ebic_is_described_as_information_criterion_computes_it():
     for where, text in texts.items():
         for said in re.finditer(r"(\w+)\s+the\s+logarithm\s+of\s+the\s+number\s+of\s+subsets", text):
             assert said.group(1) == "twice", f"{where}: {said.group(0)!r}"
+
+
+def test_every_public_function_has_a_numpy_parameters_section():
+    """Public functions take numpy-style docstrings (the project's rule): the API pages list each parameter with
+    its type, units and shape from the Parameters section. mse, rrse, fit_percent, parse_term, cluster_map,
+    reference.eq1 / eq1_points and the simulators' input designs had prose only."""
+    import inspect
+
+    from graybox._layers import LAYERS
+
+    missing = []
+    for unit in (u for u, _, _ in LAYERS if not u.startswith("_") and u != "reproduce"):
+        module = importlib.import_module(f"graybox.{unit}")
+        for name in module.__all__:
+            obj = getattr(module, name)
+            if not inspect.isfunction(obj):
+                continue
+            params = [p for p in inspect.signature(obj).parameters if not p.startswith("_")]
+            doc = inspect.getdoc(obj) or ""
+            section = doc.split("\nParameters\n----------\n", 1)
+            # an entry names one parameter or several ("xlabel, ylabel : str") at the start of its line
+            named = set() if len(section) < 2 else {n for line in re.findall(r"^(\w[\w, ]*?)(?: :|$)", section[1], re.M)
+                                                    for n in re.split(r",\s*", line)}
+            if set(params) - named:
+                missing.append(f"graybox.{unit}.{name}: {sorted(set(params) - named)}")
+    assert not missing, missing

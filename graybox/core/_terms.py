@@ -301,6 +301,15 @@ def parse_term(text: str) -> Term:
 
     Factors may be separated by nothing, spaces or ``*``. Raises ``ValueError`` with the
     offending text when it cannot be read, ``TypeError`` when it is not text.
+
+    Parameters
+    ----------
+    text : str
+        One term: lagged factors ``name(k-j)`` with optional powers ``^p``, or ``"1"`` for the constant.
+
+    Returns
+    -------
+    Term
     """
     if not isinstance(text, str):
         raise TypeError(f"a term must be a string, got {type(text).__name__}")

@@ -506,6 +506,18 @@ def two_speed_reference(*, n_samples: int = N_SAMPLES_MISO, n_ident: int = N_IDE
     [``low``, ``high``] visited in the identification part ``:n_ident`` and in the validation
     part ``n_ident:``), from its own random stream (``[seed, 11]`` and ``[seed, 12]``), so the two
     references change at unrelated instants and to unrelated levels.
+
+    Parameters
+    ----------
+    n_samples : int
+        Length of both references, samples of Ts = 0.05 s (default 6000: the records of
+        :func:`graybox.load_pumping_miso`).
+    n_ident : int
+        Samples of the identification part, the first (default 4800); the rest is the validation part.
+    seed : int
+        Seed of both columns' streams (default 2011, the bundled records').
+    low, high : float
+        The speed range of each pump set (rpm), 0 < low < high; default 1150–1650.
     """
     n_samples, n_ident, seed = reference_lengths(n_samples, n_ident, seed)
     low, high = check_real(low, "low (rpm)", low=0, low_open=True), check_real(high, "high (rpm)")
@@ -548,6 +560,20 @@ def static_grid_experiment(
     ``average`` seconds of noisy measurements at each pair (``speeds``: shape (K, 2), a DataFrame with
     columns ``u1`` and ``u2`` read by name, as :meth:`TwoSpeedPumpingPlant.simulate` reads ``u``); ``seed`` (an int
     or a numpy Generator) is the source of noise.
+
+    Parameters
+    ----------
+    plant : TwoSpeedPumpingPlant
+        The simulated two-speed rig.
+    speeds : ndarray of shape (K, 2) or DataFrame with columns u1, u2, optional
+        The speed pairs held, in the order visited (rpm; default a 6 × 6 serpentine over 1150, 1250, …, 1650), finite
+        and within the rig's speed range.
+    seed : int or numpy Generator, optional
+        Source of noise; required while the plant's noise is on.
+    settle : float
+        Seconds discarded at each pair (default 180).
+    average : float
+        Seconds averaged after them (default 6).
 
     Returns
     -------

@@ -930,6 +930,18 @@ def speed_reference(*, n_samples: int = N_SAMPLES, n_ident: int = N_IDENT, seed:
     there: as little as 10 rpm, or none, when a neighbour holds that very level (the two then
     make one longer hold); over seeds 0–199, 1 part in 8 has such a step. Each part needs at least
     541 samples (27 s: four holds for any seed); a shorter one raises ``ValueError``.
+
+    Parameters
+    ----------
+    n_samples : int
+        Length of the whole reference, samples of Ts = 0.05 s (default 4000: the identification and validation
+        records of :func:`graybox.load_pumping`).
+    n_ident : int
+        Samples of the identification part, the first (default 3200); the rest is the validation part.
+    seed : int
+        Seed of the random levels and holds (default 2011, the bundled records').
+    low, high : float
+        The speed range (rpm), default 750–1650.
     """
     n_samples, n_ident, seed = reference_lengths(n_samples, n_ident, seed)
     rng = np.random.default_rng([seed, 1])
@@ -1018,6 +1030,19 @@ def static_experiment(
     die out, which is why its black-box models miss the static curve. A shorter ``settle`` is
     fine when the speed does not change (nothing excites them). ``seed`` (an int or a numpy
     Generator) is the source of noise, as for :meth:`PumpingPlant.simulate`.
+
+    Parameters
+    ----------
+    plant : PumpingPlant
+        The simulated rig.
+    speeds : sequence of float
+        The speeds held, in the order visited (rpm; default 750, 850, …, 1650), within the plant's speed range.
+    seed : int or numpy Generator, optional
+        Source of noise; required while the plant's noise is on (:meth:`PumpingPlant.simulate`).
+    settle : float
+        Seconds discarded at each speed (default 180).
+    average : float
+        Seconds averaged after them (default 6).
 
     Returns
     -------

@@ -59,7 +59,24 @@ def _measured_and_model(y: object, yhat: object, start: object) -> tuple[np.ndar
 def mse(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
     """Mean squared error of ``yhat`` against ``y`` over samples ``start …``; inf if ŷ is not finite.
 
-    ``y`` (measured) and ``yhat`` are 1-D of one length, ``y`` finite; ``start`` >= 0.
+    Parameters
+    ----------
+    y : ndarray, shape (N,)
+        The measured output (finite; output units).
+    yhat : ndarray, shape (N,)
+        The model's output on the same samples (NaN or inf where its free run diverged).
+    start : int
+        The first sample counted (default 0; a model's largest lag, as :func:`js` counts); ``start < N``.
+
+    Returns
+    -------
+    float
+        mean((y − ŷ)²) over samples start … N − 1, output units²; inf where ŷ is not finite.
+
+    Raises
+    ------
+    ValueError
+        ``y`` and ``yhat`` of different lengths, a ``y`` that is not finite, ``start`` negative or at least N.
     """
     y, yhat = _measured_and_model(y, yhat, start)
     with np.errstate(over="ignore"):  # an error beyond the float range is inf, and says so (numpy's warning did not)
@@ -144,7 +161,25 @@ def jsf(model: Model, static: StaticPoints | Dataset, y0: float | np.ndarray | N
 def rrse(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
     """Root relative squared error ‖y − ŷ‖ / ‖y − mean(y)‖ over samples ``start …``.
 
-    ``y`` is measured, ``yhat`` the model's output (inf when ``yhat`` is not finite).
+    Parameters
+    ----------
+    y : ndarray, shape (N,)
+        The measured output (finite; output units).
+    yhat : ndarray, shape (N,)
+        The model's output on the same samples (NaN or inf where its free run diverged).
+    start : int
+        The first sample counted (default 0; a model's largest lag, as :func:`js` counts); ``start < N``.
+
+    Returns
+    -------
+    float
+        Dimensionless (0: a perfect output, 1: no better than the measured mean); inf where ŷ is not finite.
+
+    Raises
+    ------
+    ValueError
+        As :func:`mse`, and for a measured output that is constant over the samples counted (no spread to
+        compare with).
     """
     y, yhat = _measured_and_model(y, yhat, start)
     if not np.all(np.isfinite(yhat)):
@@ -159,7 +194,25 @@ def rrse(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
 def fit_percent(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
     """MATLAB ``compare`` fit: 100 (1 − ‖y − ŷ‖ / ‖y − mean(y)‖), in percent.
 
-    ``y`` is measured, ``yhat`` the model's output, counted from sample ``start`` on.
+    Parameters
+    ----------
+    y : ndarray, shape (N,)
+        The measured output (finite; output units).
+    yhat : ndarray, shape (N,)
+        The model's output on the same samples (NaN or inf where its free run diverged).
+    start : int
+        The first sample counted (default 0; a model's largest lag, as :func:`js` counts); ``start < N``.
+
+    Returns
+    -------
+    float
+        100 (1 − :func:`rrse`), percent (100: a perfect output; negative: worse than the measured mean); −inf
+        where ŷ is not finite.
+
+    Raises
+    ------
+    ValueError
+        As :func:`rrse`.
     """
     return 100.0 * (1.0 - rrse(y, yhat, start=start))
 

@@ -236,6 +236,16 @@ def cluster_map(structure: Structure) -> ClusterMap:
     Single-input structures only (a structure with several inputs has a static *surface*:
     :func:`graybox.surface_cluster_map`); ``ValueError`` otherwise. A
     sequence of terms is read as a Structure.
+
+    Parameters
+    ----------
+    structure : Structure or sequence of terms
+        Process terms, grouped into clusters Σ_{y^p u^q} (a noise term has none: ``ValueError``; a Model's
+        :meth:`~graybox.Model.clusters` passes its process part).
+
+    Returns
+    -------
+    ClusterMap
     """
     return _cluster_map(structure_of(structure))
 
