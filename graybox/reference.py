@@ -71,13 +71,14 @@ def eq1_points(ubar: np.ndarray | None = None) -> StaticPoints:
     Returns
     -------
     StaticPoints
-        ū (rpm) and ȳ = :func:`eq1` (ū) (mlc), shape (M,), named ``"eq. (1)"``; no uncertainty.
+        ū (rpm) and ȳ = :func:`eq1` (ū) (mlc), shape (M,), named ``"eq. (1)"``, units ("rpm", "mlc"); no
+        uncertainty.
     """
     ub = np.arange(750.0, 1651.0, 100.0) if ubar is None else real_array(ubar, "ubar")
     if ub.ndim > 1:  # speeds of the one input: said of ubar, not of the curve's values at them
         raise ValueError(f"ubar must be 1-D (speeds, rpm), got shape {ub.shape}")
     ub = ub.reshape(-1)  # one speed: one point
-    return StaticPoints(ub, eq1(ub), name="eq. (1)")
+    return StaticPoints(ub, eq1(ub), name="eq. (1)", units=("rpm", "mlc"))
 
 
 #: Table I as printed, MSE in mlc² of the measured plant: model → ``JS_ident``, ``JS_valid``, ``JSF``

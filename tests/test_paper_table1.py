@@ -57,3 +57,15 @@ def test_a_missing_row_is_named():
     frame = pd.DataFrame({"JS_valid": [2.0]}, index=["ELS (15)"])
     with pytest.raises(KeyError, match="SE"):
         se_against_els(frame)
+
+
+def test_eq1_points_carry_the_units_the_paper_models_and_the_bundled_points_carry():
+    """reference.eq1_points() said ū in rpm and ȳ in mlc, but carried no units (plots left the axes unlabelled and
+    a saved file said none), beside paper_model's ("rpm", "mlc") and the bundled plant's points."""
+    import graybox as gb
+    from graybox import reference
+
+    pts = reference.eq1_points()
+    assert pts.units == reference.paper_model(15).units == gb.load_pumping().static.units == ("rpm", "mlc")
+    assert reference.eq1_points([900.0]).units == ("rpm", "mlc")
+    np.testing.assert_allclose(pts.ybar, 7.2652e-6 * pts.ubar**2 + 1.4933e-3 * pts.ubar - 1.3312, rtol=1e-15)
