@@ -408,3 +408,16 @@ def test_pyproject_lists_every_subpackage():
     assert {"graybox.data", "graybox.data.pumping"} <= listed
     assert (REPO / "data" / "pumping" / "dynamic.csv").is_file()
     assert (REPO / "data" / "pumping" / "static.csv").is_file()
+
+
+def test_speed_reference_refuses_a_range_below_zero_rpm_as_the_two_speed_reference_does():
+    """speed_reference(low=-100) returned speeds down to -100 rpm, which no pump runs at (PumpingPlant refuses them),
+    while two_speed_reference refused low <= 0 naming it."""
+    from graybox.datasets import speed_reference, two_speed_reference
+
+    for make in (speed_reference, two_speed_reference):
+        with pytest.raises(ValueError, match="low"):
+            make(low=-100.0, high=750.0)
+        with pytest.raises(ValueError, match="low"):
+            make(low=0.0, high=750.0)
+    assert speed_reference(low=10.0, high=750.0).min() >= 10.0

@@ -941,7 +941,7 @@ def speed_reference(*, n_samples: int = N_SAMPLES, n_ident: int = N_IDENT, seed:
     seed : int
         Seed of the random levels and holds (default 2011, the bundled records').
     low, high : float
-        The speed range (rpm), default 750–1650.
+        The speed range (rpm), 0 < low; default 750–1650.
     """
     n_samples, n_ident, seed = reference_lengths(n_samples, n_ident, seed)
     rng = np.random.default_rng([seed, 1])
@@ -965,7 +965,8 @@ def reference_lengths(n_samples: object, n_ident: object, seed: object) -> tuple
 
 def _staircase(n: int, rng: np.random.Generator, low: float, high: float) -> np.ndarray:
     """One part of a speed reference: holds of 80–180 samples at whole multiples of 10 rpm in [low, high]."""
-    low, high = check_real(low, "low (rpm)"), check_real(high, "high (rpm)")
+    # a pump's speed is positive (a range from -100 rpm gave negative levels, as two_speed_reference refused)
+    low, high = check_real(low, "low (rpm)", low=0, low_open=True), check_real(high, "high (rpm)")
     # the levels are the multiples of 10 rpm inside [low, high] (a low of 755 rpm gave levels of 750 and a high of
     # 1646 rpm levels of 1650, and clipping to 755 levels off the grid): the steps move between lo10 and hi10
     lo10, hi10 = math.ceil(low / 10) * 10.0, math.floor(high / 10) * 10.0
