@@ -140,25 +140,29 @@ def _literal_bars(app, what, name, obj, options, lines) -> None:  # noqa: ANN001
             lines[i] = line.replace("|", "\\|")
 
 
-#: Cross-references to graybox's own names must resolve (a broken one is a warning, so an error of the -W build); the
-#: others (numpy, pandas, "optional", "shape (N,)" of numpy-style type lines) and private names are not checked.
+#: Where each public name is documented: its subpackage.
+HOME = {name: unit for unit in reversed(API_PACKAGES) for name in importlib.import_module(f"graybox.{unit}").__all__}
+
+#: Cross-references to graybox's own names (``graybox.X``, or a public name alone: ``Model.name``) must resolve (a
+#: broken one is a warning, so an error of the -W build); the others (numpy, pandas, "optional", "shape (N,)" of
+#: numpy-style type lines) and private names are not checked.
 nitpicky = True
-nitpick_ignore_regex = [(r".*", r"(?!graybox\.).*"), (r".*", r"graybox\.(\w+\.)*_\w*(\..*)?")]
+nitpick_ignore_regex = [(r".*", r"(?!graybox\.|(?:" + "|".join(sorted(HOME)) + r")(?:\.|$)).*"),
+                        (r".*", r"graybox\.(\w+\.)*_\w*(\..*)?")]
 
 
 def _public_home(app, env, node, contnode):  # noqa: ANN001, ANN202
-    """Docstrings name a public name where users meet it, ``graybox.frols`` or ``graybox.LocalModel.ybar``; the
-    reference documents it under its subpackage (``graybox.selection.frols``). Without this such a reference rendered
-    as unlinked text: 112 of them."""
-    if node.get("refdomain") != "py" or not node.get("reftarget", "").startswith("graybox."):
+    """Docstrings name a public name where users meet it, ``graybox.frols``, ``graybox.LocalModel.ybar`` or, in another
+    subpackage's docstring, ``Model``; the reference documents it under its subpackage (``graybox.selection.frols``).
+    Without this such a reference rendered as unlinked text: 122 of them."""
+    if node.get("refdomain") != "py":
         return None
-    head, _, rest = node["reftarget"][len("graybox."):].partition(".")
-    for unit in API_PACKAGES:
-        if head in importlib.import_module(f"graybox.{unit}").__all__:
-            target = f"graybox.{unit}.{head}" + (f".{rest}" if rest else "")
-            return env.get_domain("py").resolve_xref(env, node["refdoc"], app.builder, node["reftype"], target, node,
-                                                     contnode)
-    return None
+    name = node.get("reftarget", "").lstrip("~.")
+    head, _, rest = (name[len("graybox."):] if name.startswith("graybox.") else name).partition(".")
+    if head not in HOME:
+        return None
+    target = f"graybox.{HOME[head]}.{head}" + (f".{rest}" if rest else "")
+    return env.get_domain("py").resolve_xref(env, node["refdoc"], app.builder, node["reftype"], target, node, contnode)
 
 
 def setup(app):  # noqa: ANN001, ANN201
