@@ -99,8 +99,8 @@ def test_notebooks_are_rendered_with_their_outputs(site):
 
 
 def test_user_guide_pages_exist(site):
-    for page in ("method", "experiment_design", "black_box", "gray_box", "selection", "trust", "several_inputs", "long_records",
-                 "experiments", "control"):
+    for page in ("method", "own_data", "experiment_design", "black_box", "gray_box", "selection", "trust",
+                 "several_inputs", "long_records", "experiments", "control"):
         assert (site / "guide" / f"{page}.html").exists(), page
 
 
@@ -148,3 +148,17 @@ def test_every_public_function_has_a_numpy_parameters_section():
             if set(params) - named:
                 missing.append(f"graybox.{unit}.{name}: {sorted(set(params) - named)}")
     assert not missing, missing
+
+
+def test_the_site_takes_a_newcomer_from_own_csv_files_to_a_model(site):
+    """Issue 25's newcomer has a CSV of the plant and a few static points: the README's "Your own plant" (the CSV
+    dialects, the three files, the black and gray boxes from them) was on no page of the site, whose guide named
+    load_record_csv once in passing. guide/own_data includes that section of the README (one text, two places)."""
+    import html
+
+    page = html.unescape(re.sub(r"<[^>]+>", "", (site / "guide" / "own_data.html").read_text(encoding="utf-8")))
+    for said in ('gb.load_record_csv("run1.csv"', 'gb.load_static_csv("steady.csv"', "gb.Dataset(ident, valid, steady)",
+                 "decimal=", "encoding=", "skiprows=", "units_row=True", "TOA5", "gb.save(gray"):
+        assert said in page, said
+    index = (site / "index.html").read_text(encoding="utf-8")
+    assert 'href="guide/own_data.html"' in index
