@@ -29,7 +29,8 @@ def test_a_residual_tests_file_with_a_0_over_0_test_from_the_previous_graybox_st
     lags = list(range(-20, 21))
     # (its limit that of 41 lags, as φ_uξ's: φ_ξξ's is of 20)
     t.update(name="u2_xi2", label="φ_(u²)'ξ²(τ)", kind="nonlinear", lags=lags, phi=["nan"] * len(lags),
-             outside=[], passed=False, limit=doc["object"]["tests"]["u_xi"]["limit"])
+             outside=[], passed=False, **{k: doc["object"]["tests"]["u_xi"][k] for k in ("limit", "excess_kurtosis",
+                                                                                          "skewness")})
     doc["object"]["tests"]["u2_xi2"] = t
     doc["object"]["undefined"] = {}
     path.write_text(json.dumps(doc), encoding="utf-8")

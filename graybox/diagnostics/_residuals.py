@@ -40,13 +40,15 @@ outside the classic ±1.96/√N band, and the figure draws both lines.
 
 The Bonferroni z reads each φ as normal, and far out in its tail (a lag's share of the 5 %: 0.12 % for
 41 lags), where a sum of products of heavy-tailed factors is not: u'² of a Gaussian input and ξ² of
-Gaussian noise each have kurtosis 15, their products about 225, and φ_(u²)'ξ² with the normal z rejected
-9–10 % of white records (N = 500–1000; 13–22 % with Laplace or Student-t noise). The simultaneous limit
-therefore solves the Edgeworth expansion of the two-sided tail, 2(1 − Φ(c)) + 2φ(c)[(κ − 3) He₃(c)/(24N)
-+ γ² He₅(c)/(72N)], for the lag's share, with κ = κ_a κ_b and γ = γ_a γ_b the kurtosis and skewness of the
-products a(k−τ)b(k) of the test (the two factors' own, measured on the data); it is never below the
+Gaussian noise each have kurtosis 15, and φ_(u²)'ξ² with the normal z rejected 9–10 % of white records
+(N = 500–1000; 13–22 % with Laplace or Student-t noise). The simultaneous limit therefore solves the
+Edgeworth expansion of the two-sided tail, 2(1 − Φ(c)) + 2φ(c)[κ He₃(c)/(24N) + γ² He₅(c)/(72N)], for the
+lag's share, with κ = (κ_a − 3)(κ_b − 3) and γ = γ_a γ_b from the kurtosis and skewness of the test's two
+sequences a and b, measured on the data: N times the excess kurtosis, and √N times the skewness, of a sum of
+products normalised by both sequences' norms (none where either sequence is Gaussian: with an impulse input
+and Gaussian noise φ_uξ is a normal residual over ‖ξ‖, and keeps the normal limit). It is never below the
 Bonferroni z (light tails, a uniform input, keep it), and on those records brings the rejections back to
-3–5 %. The pointwise band stays the literature's ±1.96/√N.
+4–6 %. The pointwise band stays the literature's ±1.96/√N.
 
 What the 95 % promises, measured (``benchmarks/bench_residual_tests.py``, BENCHMARKS.md: a NARX
 system with white equation noise, N = 1000, 200 records). With the system's own parameters, each
@@ -148,15 +150,16 @@ class CorrelationTest(Relocked):
         The pointwise confidence half-width z_{(1+level)/2}/√N (1.96/√N at 95 %).
     limit : float
         The half-width the pass/fail rule uses (``band`` for the pointwise rule, the Bonferroni
-        half-width for the simultaneous one, widened for heavy-tailed products: ``kurtosis``).
+        half-width for the simultaneous one, widened for heavy tails: ``excess_kurtosis``).
     outside : ndarray of int
         Lags where |φ| > ``band``.
     passed : bool
         Every |φ| <= ``limit``.
-    kurtosis, skewness : float
-        Of the lagged products a(k−τ)b(k) the test sums, were a and b independent: κ_a κ_b and γ_a γ_b
-        of its two sequences (9 and 0 for two Gaussian ones; 3 and 0, normal products, in a file of an
-        older graybox). They set the simultaneous rule's tail correction (see the module docstring).
+    excess_kurtosis, skewness : float
+        N times the excess kurtosis, and √N times the skewness, of φ at a lag were the test's two sequences a
+        and b independent: (κ_a − 3)(κ_b − 3) and γ_a γ_b from their own kurtosis and skewness (0 where either is
+        Gaussian, and in a file of an older graybox). They set the simultaneous rule's tail correction (see the
+        module docstring).
     """
 
     name: str
@@ -168,7 +171,7 @@ class CorrelationTest(Relocked):
     limit: float
     outside: np.ndarray
     passed: bool
-    kurtosis: float = 3.0
+    excess_kurtosis: float = 0.0
     skewness: float = 0.0
 
     def __post_init__(self) -> None:
@@ -197,11 +200,8 @@ class CorrelationTest(Relocked):
                                  f"got {_lag_text(lags)}")
         check_real(self.band, "band", low=0, low_open=True)
         check_real(self.limit, "limit", low=0, low_open=True)
+        check_real(self.excess_kurtosis, "excess_kurtosis")
         check_real(self.skewness, "skewness")
-        check_real(self.kurtosis, "kurtosis", low=1)
-        if self.kurtosis < (1 + self.skewness**2) * (1 - 1e-9):  # as any variable's: κ >= 1 + γ²
-            raise ValueError(f"kurtosis = {self.kurtosis!r} and skewness = {self.skewness!r} are no variable's: a "
-                             "kurtosis is at least 1 + skewness²")
         if outside.ndim != 1 or not np.array_equal(outside, lags[np.abs(phi) > self.band]):
             raise ValueError(f"outside must list the lags where |phi| > band ({lags[np.abs(phi) > self.band].tolist()}), "
                              f"got {outside.tolist()}")
@@ -291,10 +291,10 @@ class ResidualTests(Relocked):
             if self.rule == "pointwise":
                 check_agrees(t.limit, band, f"limit of tests[{k!r}]", "the pointwise rule's band and its level and n")
             else:
-                limit = _simultaneous_limit(self.level, t.lags.size, self.n, t.kurtosis, t.skewness)
+                limit = _simultaneous_limit(self.level, t.lags.size, self.n, t.excess_kurtosis, t.skewness)
                 check_agrees(t.limit, limit, f"limit of tests[{k!r}]", f"the simultaneous rule over its {t.lags.size} "
-                             f"lags at level = {self.level!r}, n = {self.n} and the products' kurtosis "
-                             f"{t.kurtosis!r} and skewness {t.skewness!r} (Bonferroni, Edgeworth tails)")
+                             f"lags at level = {self.level!r}, n = {self.n}, excess_kurtosis = "
+                             f"{t.excess_kurtosis!r} and skewness {t.skewness!r} (Bonferroni, Edgeworth tails)")
         object.__setattr__(self, "tests", FrozenMap(self.tests))  # not the caller's dict
         object.__setattr__(self, "undefined", FrozenMap(self.undefined))
         object.__setattr__(self, "residuals", residuals)
@@ -505,8 +505,9 @@ def residual_tests(
         Confidence level in (0, 1) of the band (0.95: ±1.96/√N).
     rule : {"simultaneous", "pointwise"}
         How a test passes: every lag within the Bonferroni band at ``level`` for the test as a
-        whole, its tails corrected for the products' kurtosis (default), or every lag within the pointwise ±1.96/√N band (see the module
-        docstring for why the pointwise rule fails correct models).
+        whole, its tails corrected for the sequences' kurtosis (default), or every lag within the
+        pointwise ±1.96/√N band (see the module docstring for why the pointwise rule fails correct
+        models).
     moving_average : bool
         Include the model's MA part in the residuals (default; see :func:`one_step_residuals`).
 
@@ -630,8 +631,11 @@ def residual_tests(
 
 
 def _product_shape(a: list[np.ndarray], b: list[np.ndarray]) -> tuple[float, float]:
-    """Kurtosis κ_a κ_b and skewness γ_a γ_b of the products a(k−τ)b(k) of independent a and b, from the two
-    sequences' own (means removed over every record, as in the correlation)."""
+    """N times the excess kurtosis, √N times the skewness, of the normalised correlation of independent a and b:
+    (κ_a − 3)(κ_b − 3) and γ_a γ_b from the two sequences' own (means removed over every record, as in the
+    correlation). Not κ_a κ_b − 3, the unnormalised sum's: dividing by ‖a‖‖b‖ takes out the spread of Σa² and Σb²
+    (a Gaussian b over its norm is a point of the sphere, whatever a), and an impulse input's κ_u ≈ N widened the
+    limit of a test whose φ is a normal residual."""
     shape = []
     for x in (a, b):
         c = np.concatenate(x)
@@ -640,14 +644,14 @@ def _product_shape(a: list[np.ndarray], b: list[np.ndarray]) -> tuple[float, flo
         m2 = float(np.mean(c**2))
         shape.append((float(np.mean(c**4)) / m2**2, float(np.mean(c**3)) / m2**1.5))
     (ka, ga), (kb, gb) = shape
-    return ka * kb, ga * gb
+    return (ka - 3) * (kb - 3), ga * gb
 
 
-def _simultaneous_limit(level: float, n_lags: int, n: int, kurtosis: float, skewness: float) -> float:
+def _simultaneous_limit(level: float, n_lags: int, n: int, excess_kurtosis: float, skewness: float) -> float:
     """The half-width c/√n that each of ``n_lags`` lags exceeds with probability (1 − level)/n_lags: c from the
-    Edgeworth expansion of the two-sided tail of a normalised sum of n products of this kurtosis and skewness,
+    Edgeworth expansion of the two-sided tail of Z = √n φ of excess kurtosis κ/n and skewness γ/√n,
 
-        P(|Z| > c) = 2(1 − Φ(c)) + 2φ(c) [(κ − 3) He₃(c) / (24 n) + γ² He₅(c) / (72 n)],
+        P(|Z| > c) = 2(1 − Φ(c)) + 2φ(c) [κ He₃(c) / (24 n) + γ² He₅(c) / (72 n)],
 
     its largest root, never below the normal (Bonferroni) quantile and at most √n (|φ| ≤ 1: a limit of 1 rejects
     nothing, which is what the expansion says of a few products this heavy-tailed)."""
@@ -662,7 +666,7 @@ def _simultaneous_limit(level: float, n_lags: int, n: int, kurtosis: float, skew
         c2 = np.multiply(c, c)
         he3, he5 = c * (c2 - 3), c * (c2 * (c2 - 10) + 15)
         pdf = np.exp(-c2 / 2) / np.sqrt(2 * np.pi)
-        return (special.erfc(c / np.sqrt(2)) + 2 * pdf * ((kurtosis - 3) * he3 / (24 * n)
+        return (special.erfc(c / np.sqrt(2)) + 2 * pdf * (excess_kurtosis * he3 / (24 * n)
                                                           + skewness**2 * he5 / (72 * n)) - alpha)
 
     if z0 >= top:
