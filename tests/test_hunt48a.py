@@ -156,3 +156,14 @@ def test_residuals_of_one_magnitude_leave_the_squared_residual_test_out_not_fail
     for t in r.tests.values():
         assert np.all(np.isfinite(t.phi))
     assert r.passed  # white ±0.5 residuals, independent of the input: nothing the tests can see
+
+
+def test_a_bootstrap_summary_says_how_many_chosen_members_had_an_infinite_js():
+    # summary() left the replicates whose chosen member diverged (J_S inf, which fallback="min_jsf" can choose) out of
+    # its quantiles without a word: a spread that looked tight over the replicates that ran (hunt59d)
+    b = _boot(lambda1=np.array([0.1, 1.0, 0.1]), JS=np.array([1.0, np.inf, 2.0]), JSF=np.array([0.01, 0.02, 0.03]),
+              in_band=np.array([True, False, True]), thetas=np.array([[0.5, 1.0], [0.4, 1.1], [0.5, 0.9]]),
+              rules=("D_SF", "min J_SF", "D_SF"), failures={})
+    s = b.summary()
+    assert s.loc["JS", "infinite"] == 1 and s.loc["JSF", "infinite"] == 0
+    assert s.loc["JS", "median"] == 1.5 and s.loc["JS", "q95"] < 2.0 + 1e-12

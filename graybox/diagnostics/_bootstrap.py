@@ -335,16 +335,20 @@ class DecisionBootstrap(Relocked):
         return df
 
     def summary(self) -> pd.DataFrame:
-        """The spread of the chosen member's J_S and J_SF: reference, median, 5 % and 95 % quantiles, std."""
+        """The spread of the chosen member's J_S and J_SF: reference, median, 5 % and 95 % quantiles and std over
+        the replicates whose J is finite, and ``infinite``: how many replicates' chosen member has an infinite J
+        (a free run that diverged, a static curve with no equilibrium: ``fallback="min_jsf"`` can choose such a
+        member), left out of the others."""
         import pandas as pd
 
         rows = {}
         for name in ("JS", "JSF"):
             v = getattr(self, name)[self.ok]
-            v = v[np.isfinite(v)]
-            q = np.quantile(v, [0.05, 0.5, 0.95]) if v.size else [np.nan] * 3
+            finite = v[np.isfinite(v)]
+            q = np.quantile(finite, [0.05, 0.5, 0.95]) if finite.size else [np.nan] * 3
             rows[name] = {"reference": self.reference.get(name, np.nan), "median": q[1], "q05": q[0], "q95": q[2],
-                          "std": float(np.std(v)) if v.size else np.nan}
+                          "std": float(np.std(finite)) if finite.size else np.nan,
+                          "infinite": int(np.sum(np.isinf(v)))}
         rows_df = pd.DataFrame.from_dict(rows, orient="index")
         rows_df["in band"] = float(np.mean(self.in_band[self.ok])) if self.ok.any() else np.nan
         return rows_df
