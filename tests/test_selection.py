@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 from graybox import Candidates, Model, Record, Structure, stacked_regressors
 from graybox.core._records import Dataset
 from graybox.selection._forward_regression import CandidateWarning, frols, information_criterion
+from graybox.selection._stopping import FewerTermsError
 
 # A polynomial NARX with a constant, output and input lags, a cross term and a square.
 TRUE_TERMS = ["1", "y(k-1)", "y(k-2)", "u(k-2)", "u(k-1)y(k-1)", "u(k-1)^2"]
@@ -355,3 +356,39 @@ def test_included_terms_come_first():
         frols(Candidates(2, 2, ne=0, degree=2), rec, n_terms=3, include=["y(k-5)"])
     with pytest.raises(ValueError, match="fewer than the 2 included"):
         frols(Candidates(2, 2, ne=0, degree=2), rec, n_terms=1, include=["1", "y(k-1)"])
+
+
+def _offset_narx(N=300, seed=0):
+    """A stable 2nd-order polynomial NARX of order 1, u uniform in [0, 1]."""
+    rng = np.random.default_rng(seed)
+    u, y = rng.uniform(0, 1, N), np.zeros(N)
+    for k in range(1, N):
+        y[k] = 0.5 * y[k - 1] + 0.8 * u[k - 1] + 0.2 * u[k - 1] ** 2 + 0.1 * y[k - 1] * u[k - 1]
+    return u, y
+
+
+@pytest.mark.parametrize("method, du, dy", [("gram", 1e3, -1e4), ("mgs", 1e4, -1e5)])
+def test_frols_fewer_terms_on_offset_signals_names_the_offsets(method, du, dy):
+    # raw monomials of signals far from zero are nearly collinear with the constant: the search runs out of
+    # independent terms, which the error says is the offsets' doing (centre=True selects all 6 on the same data)
+    u, y = _offset_narx()
+    rec = Record(u + du, y + dy)
+    cands = Candidates(2, 2, degree=2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", CandidateWarning)
+        with pytest.raises(FewerTermsError) as err:
+            frols(cands, rec, n_terms=6, method=method)
+        assert err.value.reached == 5
+        assert "far from zero" in str(err.value) and "centre=True" in str(err.value)
+        assert len(frols(cands, rec, n_terms=6, method=method, centre=True).structure) >= 6
+
+
+def test_frols_fewer_terms_near_zero_does_not_blame_offsets():
+    # the same error on signals about zero (u(k-1) given twice over: a duplicate column) says nothing of offsets
+    u, y = _offset_narx()
+    rec = Record(np.column_stack([u - 0.5, 2 * (u - 0.5)]), y - y.mean(), input_names=("a", "b"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", CandidateWarning)
+        with pytest.raises(FewerTermsError) as err:
+            frols(Structure(["a(k-1)", "b(k-1)", "y(k-1)"]), rec, n_terms=3, method="mgs")
+    assert "far from zero" not in str(err.value)

@@ -343,3 +343,33 @@ def stop_note(stop: str, chosen: int, closed: int, offsets: Mapping[str, float],
         note += (f", {closed - len(dropped)} without " + ", ".join(str(t) for t, _ in dropped)
                  + " (the data cannot tell them from their divisors)")
     return note
+
+
+# |mean| / std above which a signal is said to sit far from zero. At a ratio r the part of x² that the constant and x
+# leave unexplained carries about r⁻⁴ of its energy (1e-8 at r = 100), within three decades of the Gram form's
+# dependence threshold (1e-11) and of what round-off in sums of r²-sized products can resolve; products of lagged
+# copies fare alike. Below it, offsets are an unlikely cause of a search running out of independent terms.
+_FAR_FROM_ZERO = 100.0
+
+
+def offset_note(data: object, process: Structure) -> str:
+    """For an uncentred search that ran out of independent terms: a sentence naming the signals (y and the inputs
+    ``process`` uses) whose mean over ``data`` exceeds :data:`_FAR_FROM_ZERO` times their spread, and pointing to
+    ``centre=True``; ``""`` when none does (or the data are Dask records, which centre=True does not take)."""
+    if is_dask_data(data):
+        return ""
+    records = as_records(data)
+    names = records[0].input_names
+    signals = {"y": np.concatenate([r.y for r in records])}
+    us = np.concatenate([r.u.reshape(len(r.y), -1) for r in records])
+    signals.update({n: us[:, i] for i, n in enumerate(names) if n in process.input_names})
+    far = []
+    with np.errstate(invalid="ignore", over="ignore"):
+        for name, x in signals.items():
+            mean, spread = float(np.mean(x)), float(np.std(x))
+            if np.isfinite(mean) and np.isfinite(spread) and abs(mean) > _FAR_FROM_ZERO * spread:
+                far.append(f"{name} (mean {mean:.4g}, spread {spread:.3g})")
+    if not far:
+        return ""
+    return ("the signals sit far from zero against their spread: " + ", ".join(far) + "; their raw monomials are "
+            "nearly collinear with one another and the constant, and centre=True selects on them about their means")

@@ -726,6 +726,24 @@ def frols(
     if check_bool(centre, "centre"):
         return _frols_centred(candidates, data, n_terms=n_terms, tol=tol, criterion=criterion, max_terms=max_terms,
                               rank_tol=rank_tol, include=include, method=method, search=search)
+    try:
+        return _frols_raw(candidates, data, n_terms=n_terms, tol=tol, criterion=criterion, max_terms=max_terms,
+                          rank_tol=rank_tol, include=include, method=method, search=search)
+    except FewerTermsError as err:
+        # raw monomials of signals far from their zero are nearly collinear with one another and the constant:
+        # the likely cause of too few independent terms, said once for every place the search runs out
+        note = _centring.offset_note(data, candidates.process)
+        if not note:
+            raise
+        raise FewerTermsError(f"{err}; {note}", err.reached) from None
+
+
+def _frols_raw(candidates: Structure, data: object, *, n_terms: int | None, tol: float | None,
+               criterion: str | None, max_terms: int | None, rank_tol: float, include: Sequence[Term | str],
+               method: str, search: str) -> Selection:
+    """frols(centre=False) on checked candidates (see frols)."""
+    process, noise = candidates.process, candidates.noise
+    n_cand = len(process)
     # each value first (a wrong type is named as such), then how they combine
     if tol is not None:
         tol = check_real(tol, "tol", low=0, high=1, low_open=True, high_open=True)
