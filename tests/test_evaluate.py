@@ -78,3 +78,39 @@ def test_population_errors_equal_the_dense_definition_without_its_temporaries(pa
     np.testing.assert_allclose(out["J1"], dense_j1, rtol=1e-12)
     np.testing.assert_allclose(out["JS"], dense_js, rtol=1e-12)
     assert np.sum(np.isfinite(out["JS"])) > 300
+
+
+def _two_records():
+    rng = np.random.default_rng(3)
+    recs = []
+    for _ in range(2):
+        u, y = rng.uniform(0, 1, 40), np.zeros(40)
+        for k in range(1, 40):
+            y[k] = 0.5 * y[k - 1] + u[k - 1]
+        recs.append(Record(u, y))
+    return recs
+
+
+@pytest.mark.parametrize("score", [js, j1])
+def test_scores_of_a_list_of_records_say_to_score_each(score):
+    # a list of records was refused with no word of how to score several: one call per record
+    from graybox import Model, Structure
+    model = Model(Structure(["y(k-1)", "u(k-1)"]), np.array([0.5, 1.0]))
+    recs = _two_records()
+    with pytest.raises(TypeError, match=rf"once per record.*\[{score.__name__}\(model, r\) for r in records\]"):
+        score(model, recs)
+    assert score(model, recs[0]) < 1e-20  # the model that made the data, one record at a time
+
+
+def test_simulate_of_a_list_of_records_says_to_run_each():
+    # gb.simulate(model, θ, [a, b]) said "u must be an array of numbers, got list"
+    from graybox import Model, Structure, simulate
+    model = Model(Structure(["y(k-1)", "u(k-1)"]), np.array([0.5, 1.0]))
+    recs = _two_records()
+    with pytest.raises(TypeError, match=r"once per record.*for r in records"):
+        simulate(model.structure, model.theta, recs)
+    with pytest.raises(TypeError, match=r"once per record.*for r in records"):
+        model.simulate(tuple(recs))
+    np.testing.assert_allclose(simulate(model.structure, model.theta, recs[1]), recs[1].y, atol=1e-12)
+    with pytest.raises(TypeError, match=r"once per record, \[model\.predict\(r\) for r in records\]"):
+        model.predict(recs)

@@ -709,10 +709,14 @@ class Dataset(Relocked):
 __all__.append("Dataset")
 
 
-def record_hint(data: object) -> str:
-    """How to make a Record of what was given where one is meant (a path, a DataFrame, arrays), else ``""``."""
+def record_hint(data: object, call: str = "") -> str:
+    """How to make a Record of what was given where one is meant (a path, a DataFrame, arrays), else ``""``.
+    ``call``: the call on one record ``r`` that a list of records is told to make once per record."""
     if isinstance(data, Dataset):  # where one record is meant and the call cannot tell which
         return "; pass one of its records: data.ident or data.valid"
+    if call and isinstance(data, (tuple, list)) and data and all(isinstance(r, Record) for r in data):
+        # no function scores or runs several records at once: one call per record
+        return f"; it takes one record: call it once per record, [{call} for r in records]"
     # by name: core._gram (DaskRecord's home) imports this module
     dask = [r for r in (data if isinstance(data, (tuple, list)) else [data]) if type(r).__name__ == "DaskRecord"]
     if dask:
@@ -738,11 +742,11 @@ def record_hint(data: object) -> str:
     return ""
 
 
-def require_record(record: object, name: str = "record") -> Record:
+def require_record(record: object, name: str = "record", call: str = "") -> Record:
     """``record`` if it is a Record, else ``TypeError`` naming ``name`` and how to make one (a Dataset: which of its
-    records to pass)."""
+    records to pass; a list of records: ``call`` once per record)."""
     if not isinstance(record, Record):
-        raise TypeError(f"{name} must be a Record, got {type(record).__name__}{record_hint(record)}")
+        raise TypeError(f"{name} must be a Record, got {type(record).__name__}{record_hint(record, call)}")
     return record
 
 

@@ -67,7 +67,7 @@ def predict(structure: Structure, theta: np.ndarray, record: Record, *, horizon:
         bound (from the measured outputs that run starts from and the record's inputs); one step
         ahead, NaN only where the prediction itself leaves the float range.
     """
-    require_record(record)  # a Dataset: told to pass data.ident or data.valid
+    require_record(record, call="model.predict(r)")  # a Dataset: told to pass data.ident or data.valid
     check_fitted_record(structure, record)
     structure = structure_of(structure)
     th = check_theta(len(structure), theta)
@@ -142,8 +142,10 @@ def free_run_inputs(
         u = u.u
     else:
         # "u must be an array of numbers" said nothing of which record to pass, nor where a DaskRecord is taken
-        if isinstance(u, Dataset) or type(u).__name__ == "DaskRecord":  # by name: core._gram imports this package
-            raise TypeError(f"u must be a Record or an array of inputs, got {type(u).__name__}{record_hint(u)}")
+        several = isinstance(u, (tuple, list)) and bool(u) and all(isinstance(r, Record) for r in u)
+        if isinstance(u, Dataset) or type(u).__name__ == "DaskRecord" or several:  # by name: core._gram imports this
+            raise TypeError(f"u must be a Record or an array of inputs, got {type(u).__name__}"
+                            f"{record_hint(u, 'model.simulate(r)')}")
         u = as_input_array(u, "u", names)
         if y0 is None:
             if L > 0:

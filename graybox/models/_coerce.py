@@ -274,8 +274,9 @@ def static_points(static: object, data: object, *, ubar: object = None, needed_b
     return static.points(ub)
 
 
-def as_record(data: object, part: str, name: str = "data") -> Record:
-    """One record: ``data`` itself, or the part ``part`` (``"ident"`` or ``"valid"``) of a Dataset.
+def as_record(data: object, part: str, name: str = "data", call: str = "") -> Record:
+    """One record: ``data`` itself, or the part ``part`` (``"ident"`` or ``"valid"``) of a Dataset; ``call``, the
+    call on one record ``r`` that a list of records is told to make once per record.
 
     Raises
     ------
@@ -287,4 +288,4 @@ def as_record(data: object, part: str, name: str = "data") -> Record:
     if isinstance(data, Dataset):
         return getattr(data, part)
     raise TypeError(f"{name} must be a Record or a Dataset (whose {part} record is used); got {type(data).__name__}"
-                    f"{record_hint(data)}")
+                    f"{record_hint(data, call)}")

@@ -100,7 +100,7 @@ def j1(model: Model, record: Record | Dataset) -> float:
         was not fitted on).
     """
     model = as_model(model, duck=("predict", "max_lag"))
-    record = as_record(record, "valid", "record")
+    record = as_record(record, "valid", "record", call="j1(model, r)")
     return mse(record.y, model.predict(record), start=model.max_lag)
 
 
@@ -115,7 +115,7 @@ def js(model: Model, record: Record | Dataset) -> float:
         Measured data; a Dataset stands for its validation record.
     """
     model = as_model(model, duck=("simulate", "max_lag"))
-    record = as_record(record, "valid", "record")
+    record = as_record(record, "valid", "record", call="js(model, r)")
     return mse(record.y, model.simulate(record, on_diverge="nan"), start=model.max_lag)
 
 
