@@ -114,3 +114,13 @@ def test_simulate_of_a_list_of_records_says_to_run_each():
     np.testing.assert_allclose(simulate(model.structure, model.theta, recs[1]), recs[1].y, atol=1e-12)
     with pytest.raises(TypeError, match=r"once per record, \[model\.predict\(r\) for r in records\]"):
         model.predict(recs)
+
+
+def test_fit_percent_on_a_constant_output_names_itself():
+    # fit_percent said "RRSE undefined", a function the user did not call
+    y = np.full(20, 3.0)
+    with pytest.raises(ValueError, match=r"^fit_percent undefined: the measured output is constant") as err:
+        fit_percent(y, y + 0.1)
+    assert "RRSE" not in str(err.value)
+    with pytest.raises(ValueError, match=r"^RRSE undefined: the measured output is constant"):
+        rrse(y, y + 0.1)

@@ -181,12 +181,17 @@ def rrse(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
         As :func:`mse`, and for a measured output that is constant over the samples counted (no spread to
         compare with).
     """
+    return _relative_error(y, yhat, start, "RRSE")
+
+
+def _relative_error(y: object, yhat: object, start: object, what: str) -> float:
+    """:func:`rrse`, its errors naming ``what`` the user called (fit_percent is 100 (1 − RRSE))."""
     y, yhat = _measured_and_model(y, yhat, start)
     if not np.all(np.isfinite(yhat)):
         return float("inf")
     den = output_spread(y)
     if den == 0:
-        raise ValueError("RRSE undefined: the measured output is constant")
+        raise ValueError(f"{what} undefined: the measured output is constant")
     with np.errstate(over="ignore"):  # ‖y − ŷ‖ beyond the float range: inf, as mse's (numpy warned)
         return float(scaled_norm(y - yhat) / den)  # in the output's own scale, as den is: the same in any units
 
@@ -214,7 +219,7 @@ def fit_percent(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
     ValueError
         As :func:`rrse`.
     """
-    return 100.0 * (1.0 - rrse(y, yhat, start=start))
+    return 100.0 * (1.0 - _relative_error(y, yhat, start, "fit_percent"))
 
 
 def fit_or_nan(y: np.ndarray, yhat: np.ndarray, start: int) -> float:
