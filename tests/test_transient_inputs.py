@@ -233,3 +233,18 @@ def test_the_old_names_of_input_names_still_work_and_say_the_new_one():
     assert old.input_names == new.input_names and np.array_equal(old.u, new.u)
     with pytest.raises(TypeError, match="give input_names= only"):
         gb.transient_inputs(rec, taus=[1.0], input_names=["b"], inputs=["b"])
+
+
+def test_local_model_on_data_lacking_a_transient_input_says_how_to_add_it():
+    # local_model(M, 1.5, data=rec0) said the bare "no input named 'u_tau3'" where Model.simulate says how to add it
+    rng = np.random.default_rng(0)
+    rec0 = gb.Record(np.repeat(rng.uniform(0, 2, 10), 10), np.zeros(100), Ts=1.0)
+    model = gb.Model(gb.Structure(["y(k-1)", "u(k-1)", "u_tau3(k-1)"]), np.array([0.5, 1.0, 0.2]), Ts=1.0)
+    with pytest.raises(ValueError) as simulated:
+        model.simulate(rec0)
+    with pytest.raises(ValueError) as local:
+        gb.local_model(model, 1.5, data=rec0)
+    assert "transient_inputs(record, taus=[3], input_names=['u'])" in str(local.value)
+    assert str(local.value) == str(simulated.value)
+    lm = gb.local_model(model, 1.5, data=gb.transient_inputs(rec0, (3,)))
+    assert lm is not None

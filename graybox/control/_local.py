@@ -32,7 +32,7 @@ import numpy as np
 from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, as_records, check_period,
                               check_same_units, check_units, frame_inputs, labelled_point, outside_range,
                               rounded_levels, static_point_inputs)
-from ..core._terms import Structure, check_input_names
+from ..core._terms import Structure, check_input_names, require_inputs
 from ..core._transient import steady_levels
 from ..core._reprs import exact_text, listed
 from ..core._validation import (Relocked, check_count, check_band_finite, check_band_values, check_choice, check_fields,
@@ -661,6 +661,8 @@ def _range_warning(model: Model, ub: np.ndarray, data: object) -> None:
     # each input by name, in the model's order (the data's columns may be in another, and a record
     # may hold inputs the model does not use, one input included)
     names = model.input_names
+    for r in recs:  # an input the model uses and a record lacks (a transient one: how to add it), as Model.simulate
+        require_inputs(names, r.input_names, "but the record's inputs are", prefix=f"{r.name}: ")
     cols = [np.column_stack([r.input(n) for n in names]) for r in recs]
     if static is not None:
         cols.append(static_point_inputs(static, names).reshape(len(static), -1))
