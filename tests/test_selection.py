@@ -392,3 +392,12 @@ def test_frols_fewer_terms_near_zero_does_not_blame_offsets():
         with pytest.raises(FewerTermsError) as err:
             frols(Structure(["a(k-1)", "b(k-1)", "y(k-1)"]), rec, n_terms=3, method="mgs")
     assert "far from zero" not in str(err.value)
+
+
+def test_semp_short_of_its_size_on_offset_signals_names_the_offsets():
+    # semp on u + 1e4, y − 1e5 said only "the search never reached 6 terms (… collinear …)"; centre=True reaches them
+    from graybox import semp
+    u, y = _offset_narx()
+    rec = Record(u + 1e4, y - 1e5)
+    with pytest.raises(ValueError, match=r"never reached 6 terms.*far from zero.*centre=True"):
+        semp(Candidates(2, 2, degree=2), rec, n_terms=6)

@@ -372,7 +372,7 @@ def semp(
                              "included terms")
         run = _Search(sc, opt)
         stop, capped = _grow(run)
-        return _unscaled(_result(run, stop, capped), exps, given)
+        return _unscaled(_result(run, stop, capped, given), exps, given)
 
 
 def _unscaled(res: SEMPResult, exps: dict[str, int], given: object) -> SEMPResult:
@@ -648,12 +648,15 @@ def _prune(run: _Search, added: int) -> None:
         run.move("remove", removable[i], nxt, trial[i], float(s_r[i]))
 
 
-def _result(run: _Search, stop: str, capped: bool) -> SEMPResult:
-    """The structure of the path that the stopping rule chooses (warning as frols does), as a SEMPResult."""
+def _result(run: _Search, stop: str, capped: bool, data: object = None) -> SEMPResult:
+    """The structure of the path that the stopping rule chooses (warning as frols does), as a SEMPResult; ``data``,
+    the raw records, for the offsets' note where the size asked was not reached."""
     opt, sc = run.opt, run.sc
     path = pd.DataFrame(run.rows)
     if opt.mode == "n_terms" and not (path["n_terms"] == opt.n_terms).any():
-        raise ValueError(f"the search never reached {opt.n_terms} terms ({stop})")
+        # as frols says: offsets make the raw monomials collinear, the likely cause (centre=True reaches the size)
+        note = "" if data is None else _centring.offset_note(data, opt.process)
+        raise ValueError(f"the search never reached {opt.n_terms} terms ({stop})" + (f"; {note}" if note else ""))
     # the same rule as frols: the size asked for, the smallest model within the tolerance, or the
     # criterion's minimum (warning when the size limit cut the curve or the search short)
     scored = path[path["n_terms"] > 0] if (path["n_terms"] > 0).any() else path
