@@ -248,3 +248,17 @@ def test_local_model_on_data_lacking_a_transient_input_says_how_to_add_it():
     assert str(local.value) == str(simulated.value)
     lm = gb.local_model(model, 1.5, data=gb.transient_inputs(rec0, (3,)))
     assert lm is not None
+
+
+def test_static_points_lacking_a_transient_input_are_told_how_to_add_it():
+    # jsf(M, points) and local_model(M, ū, data=points) said only "(no 'u_tau3')"; transient_inputs adds z̄ = 0 columns
+    model = gb.Model(gb.Structure(["y(k-1)", "u(k-1)", "u_tau3(k-1)"]), np.array([0.5, 1.0, 0.2]), Ts=1.0)
+    points = gb.StaticPoints(np.array([0.5, 1.0, 1.5]), np.array([1.1, 2.0, 2.9]))
+    hint = "transient_inputs(static, taus=[3], input_names=['u'])"
+    for call in (lambda: gb.jsf(model, points), lambda: gb.local_model(model, 1.5, data=points)):
+        with pytest.raises(ValueError) as err:
+            call()
+        assert hint in str(err.value)
+    # as told: the static curve at z̄ = 0 is ȳ = ū / (1 − 0.5) = 2 ū, so J_SF = mean((ȳ − 2 ū)²)
+    want = np.mean((np.array([1.1, 2.0, 2.9]) - 2.0 * np.array([0.5, 1.0, 1.5])) ** 2)
+    assert gb.jsf(model, gb.transient_inputs(points, (3,))) == pytest.approx(want)

@@ -18,7 +18,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from ._reprs import listed, range_text
-from ._terms import check_input_names, default_input_names, transient_source
+from ._terms import check_input_names, default_input_names, missing_input_hint, transient_source
 from ._validation import (Relocked, as_1d_finite, locked, check_int, check_ordered, check_per_point, check_real,
                           check_str, float_array, frozen_value, refuse_non_real, warn)
 
@@ -507,8 +507,11 @@ def static_point_inputs(static: StaticPoints, inputs: tuple[str, ...]) -> np.nda
         return static.ubar
     missing = [n for n in inputs if n not in static.input_names]
     if missing:
+        # a transient input (z̄ = 0 at every static point): how to add it; other hints speak of records
+        hint = ("" if transient_source(missing[0], static.input_names) is None
+                else missing_input_hint(inputs, static.input_names, "static"))
         raise ValueError(f"{static.name}: the model has the inputs {tuple(inputs)} but the static points have "
-                         f"{static.input_names} (no {missing[0]!r})")
+                         f"{static.input_names} (no {missing[0]!r}){hint}")
     return static.ubar[:, [static.input_names.index(n) for n in inputs]]
 
 

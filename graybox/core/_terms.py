@@ -96,11 +96,11 @@ def require_inputs(used: Iterable[str], names: tuple[str, ...], among: str, pref
     raise ValueError(f"{prefix}the structure uses input {missing[0]!r}, {among} {names}{missing_input_hint(used, names)}")
 
 
-def missing_input_hint(used: Sequence[str], names: Sequence[str]) -> str:
+def missing_input_hint(used: Sequence[str], names: Sequence[str], data: str = "record") -> str:
     """How to give the data the inputs a structure ``used`` lacks among ``names``: a transient input of an input
     that is there, added with transient_inputs; inputs left with their default names, named; else terms and
     data named alike (:func:`rename_hint`). Every message of a missing input says it (:func:`require_inputs`, the
-    regressors')."""
+    regressors'). ``data``: what transient_inputs is told to extend (``"record"``, ``"static"``)."""
     used, names = tuple(used), tuple(names)
     missing = [n for n in used if n not in names]
     if not missing:
@@ -108,7 +108,7 @@ def missing_input_hint(used: Sequence[str], names: Sequence[str]) -> str:
     source = transient_source(missing[0], names)
     if source is not None:
         tau = transient_tau_text(missing[0], source)
-        return (f" (if it is a transient input, add it with graybox.transient_inputs(record, taus=[{tau}], "
+        return (f" (if it is a transient input, add it with graybox.transient_inputs({data}, taus=[{tau}], "
                 f"input_names=[{source!r}]))")
     if names == default_input_names(len(names)):
         # the data's inputs carry the default names: they were never named (one CSV column is "u")
