@@ -401,3 +401,14 @@ def test_semp_short_of_its_size_on_offset_signals_names_the_offsets():
     rec = Record(u + 1e4, y - 1e5)
     with pytest.raises(ValueError, match=r"never reached 6 terms.*far from zero.*centre=True"):
         semp(Candidates(2, 2, degree=2), rec, n_terms=6)
+
+
+def test_frols_fewer_terms_with_a_held_input_does_not_blame_offsets():
+    # an input held at 5 has no spread: centred it is zero, so centre=True is no way out and the note would mislead
+    u, y = _offset_narx()
+    rec = Record(np.column_stack([u, np.full(u.size, 5.0)]), y, input_names=("a", "b"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", CandidateWarning)
+        with pytest.raises(FewerTermsError) as err:
+            frols(Structure(["a(k-1)", "b(k-1)", "y(k-1)", "1"]), rec, n_terms=4)
+    assert err.value.reached == 3 and "far from zero" not in str(err.value)

@@ -354,8 +354,8 @@ _FAR_FROM_ZERO = 100.0
 
 def offset_note(data: object, process: Structure) -> str:
     """For an uncentred search that ran out of independent terms: a sentence naming the signals (y and the inputs
-    ``process`` uses) whose mean over ``data`` exceeds :data:`_FAR_FROM_ZERO` times their spread, and pointing to
-    ``centre=True``; ``""`` when none does (or the data are Dask records, which centre=True does not take)."""
+    ``process`` uses) whose mean over ``data`` exceeds :data:`_FAR_FROM_ZERO` times their spread (none held at one
+    level: :func:`is_held`), and pointing to ``centre=True``; ``""`` when none does (or the data are Dask records, which centre=True does not take)."""
     if is_dask_data(data):
         return ""
     records = as_records(data)
@@ -367,7 +367,8 @@ def offset_note(data: object, process: Structure) -> str:
     with np.errstate(invalid="ignore", over="ignore"):
         for name, x in signals.items():
             mean, spread = float(np.mean(x)), float(np.std(x))
-            if np.isfinite(mean) and np.isfinite(spread) and abs(mean) > _FAR_FROM_ZERO * spread:
+            # a held signal is no offset: centred it is zero, which centre=True cannot select on either
+            if np.isfinite(mean) and np.isfinite(spread) and abs(mean) > _FAR_FROM_ZERO * spread and not is_held(x):
                 far.append(f"{name} (mean {mean:.4g}, spread {spread:.3g})")
     if not far:
         return ""
