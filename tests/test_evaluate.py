@@ -124,3 +124,15 @@ def test_fit_percent_on_a_constant_output_names_itself():
     assert "RRSE" not in str(err.value)
     with pytest.raises(ValueError, match=r"^RRSE undefined: the measured output is constant"):
         rrse(y, y + 0.1)
+
+
+def test_rrse_and_fit_near_the_float_range_s_end():
+    # y alternating ±1e308 was "constant" (its norm, inf, below CONSTANT_RTOL × inf) and y = [1e308, 0, …] had an inf
+    # mean: ratios of norms are read in y's own scale. By hand: ŷ = −y gives ‖2y‖ / ‖y‖ = 2; with ŷ = 0 and y = c [1, 0,
+    # 1, 0], ‖y‖ / ‖y − c/2‖ = √2 c / c = √2
+    y = np.array([1e308, -1e308, 1e308, -1e308])
+    assert rrse(y, -y) == pytest.approx(2.0)
+    assert fit_percent(y, -y) == pytest.approx(-100.0)
+    z = np.array([1e308, 0.0, 1e308, 0.0])
+    assert rrse(z, np.zeros(4)) == pytest.approx(np.sqrt(2.0))
+    assert rrse(z * 1e-308 * 1e-10, np.zeros(4)) == pytest.approx(np.sqrt(2.0))

@@ -137,8 +137,13 @@ def output_spread(y: np.ndarray) -> float:
         return 0.0
     # in a scale of the output's own (an output near 1e200 was 'constant', its norms inf; near 1e-200 their squares
     # were 0): the same spread in any units
+    # read over the power of two above max|y| (exact), mapped back: near the float range's end y's sum (its mean)
+    # and ‖y‖ were inf, and ±1e308 'constant'
+    e = binary_exponent(float(np.max(np.abs(y))))
+    y = np.ldexp(y, -e)
     den = scaled_norm(y - y.mean())
-    return 0.0 if den <= CONSTANT_RTOL * scaled_norm(y) else den
+    with np.errstate(over="ignore"):  # a spread beyond the float range: inf, as the norm's
+        return 0.0 if den <= CONSTANT_RTOL * scaled_norm(y) else float(np.ldexp(den, e))
 
 
 def spread_scale(std: float, rms: float) -> float:

@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Mapping, Sequence
 import numpy as np
 
 from ..core._least_squares import CONSTANT_RTOL, mean_square, output_spread, scaled_norm  # noqa: F401 (home: core)
-from ..core._least_squares import binary_scaled, scaled_points, scaled_theta
+from ..core._least_squares import binary_exponent, binary_scaled, scaled_points, scaled_theta
 from ..core._simulation_kernels import batch_sse, encode, record_inputs
 from ._model import Model
 from ._coerce import as_model, as_record, as_structure, static_info
@@ -189,6 +189,10 @@ def _relative_error(y: object, yhat: object, start: object, what: str) -> float:
     y, yhat = _measured_and_model(y, yhat, start)
     if not np.all(np.isfinite(yhat)):
         return float("inf")
+    # both norms over the power of two above max|y| (exact): near the float range's end y − ŷ overflowed (±1e308)
+    e = binary_exponent(float(np.max(np.abs(y))))
+    with np.errstate(over="ignore"):  # ŷ beyond y's scale by more than the float range: inf, its RRSE's float
+        y, yhat = np.ldexp(y, -e), np.ldexp(yhat, -e)
     den = output_spread(y)
     if den == 0:
         raise ValueError(f"{what} undefined: the measured output is constant")
