@@ -508,3 +508,16 @@ def test_bad_model_and_call_arguments(small_net):
         small_net.predict(u)  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="fewer than max lag"):
         small_net.predict(Record([1.0, 2.0], [1.0, 2.0]))
+
+
+def test_a_network_given_a_list_of_records_says_to_run_each():
+    # NeuralModel.predict([a, b]) said "record must be a Record, got list" and nothing more
+    net = hand_net(0.5, 1.0)
+    rng = np.random.default_rng(0)
+    recs = [Record(rng.uniform(0, 1, 20), rng.uniform(0, 1, 20)) for _ in range(2)]
+    with pytest.raises(TypeError, match=r"once per record, \[model\.predict\(r\) for r in records\]"):
+        net.predict(recs)
+    with pytest.raises(TypeError, match=r"once per record, \[model\.predict_narmax\(r\) for r in records\]"):
+        net.predict_narmax(recs)
+    with pytest.raises(TypeError, match=r"once per record, \[model\.simulate\(r\) for r in records\]"):
+        net.simulate(recs)

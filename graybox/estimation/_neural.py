@@ -537,7 +537,7 @@ class NeuralModel(Relocked):
         horizon : int >= 1, keyword-only
             Samples ahead (default 1).
         """
-        require_record(record)  # a Dataset: told to pass data.ident or data.valid
+        require_record(record, call="model.predict(r)")  # a Dataset: told to pass data.ident or data.valid
         horizon = check_int(horizon, "horizon", low=1)
         L = self.max_lag
         record.require_length(L)
@@ -578,7 +578,7 @@ class NeuralModel(Relocked):
         e : ndarray, shape (N,)
             Residuals y − ŷ in output units (0 on the first ``max_lag`` samples).
         """
-        require_record(record)  # a Dataset: told to pass data.ident or data.valid
+        require_record(record, call="model.predict_narmax(r)")  # a Dataset: told to pass data.ident or data.valid
         record.require_length(self.max_lag)
         un, yn = self._un(self._input(record)), self._yn(record.y)
         seg = np.array([0, len(record)], dtype=np.int64)
