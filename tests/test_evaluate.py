@@ -136,3 +136,16 @@ def test_rrse_and_fit_near_the_float_range_s_end():
     z = np.array([1e308, 0.0, 1e308, 0.0])
     assert rrse(z, np.zeros(4)) == pytest.approx(np.sqrt(2.0))
     assert rrse(z * 1e-308 * 1e-10, np.zeros(4)) == pytest.approx(np.sqrt(2.0))
+
+
+def test_jsf_of_a_list_of_static_point_sets_says_how_to_pool_them():
+    # jsf(M, [p, q]) said "make them of the levels and the settled outputs: StaticPoints(ubar, ybar)", as if for arrays
+    from graybox import Model, StaticPoints, Structure
+    model = Model(Structure(["y(k-1)", "u(k-1)"]), np.array([0.5, 1.0]))
+    p, q = StaticPoints(np.array([0.5, 1.0]), np.array([1.1, 2.0])), StaticPoints(np.array([2.0]), np.array([3.9]))
+    with pytest.raises(TypeError, match=r"one StaticPoints of all their points.*np\.concatenate") as err:
+        jsf(model, [p, q])
+    assert "settled outputs" not in str(err.value)
+    # as told, pooled: ȳ = 2 ū, so J_SF = mean of (0.1², 0, 0.1²)
+    pooled = StaticPoints(np.concatenate([s.ubar for s in (p, q)]), np.concatenate([s.ybar for s in (p, q)]))
+    assert jsf(model, pooled) == pytest.approx(0.02 / 3)

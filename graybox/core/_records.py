@@ -759,6 +759,10 @@ def static_hint(static: object) -> str:
         return "; read the file first: graybox.load_static_csv(path, u='input column', y='output column')"
     if is_frame(static):
         return "; make them of its columns: graybox.StaticPoints(df['input column'], df['output column'])"
+    if isinstance(static, (tuple, list)) and static and all(isinstance(p, StaticPoints) for p in static):
+        return ("; several sets are one StaticPoints of all their points: graybox.StaticPoints(np.concatenate("
+                "[p.ubar for p in sets]), np.concatenate([p.ybar for p in sets]), input_names=sets[0].input_names, "
+                "units=sets[0].units)")
     if isinstance(static, (np.ndarray, tuple, list)):
         return "; make them of the levels and the settled outputs: graybox.StaticPoints(ubar, ybar)"
     if callable(static):
