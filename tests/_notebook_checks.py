@@ -31,6 +31,16 @@ EXPECTED_WARNINGS: dict[str, list[tuple[str, str]]] = {
 
 _CAUGHT: list[tuple[str, str]] = []
 
+#: The number words the notebooks' text counts with.
+_WORDS = {2: "two", 3: "three", 4: "four", 5: "five", 6: "six", 7: "seven", 8: "eight", 9: "nine", 10: "ten"}
+
+
+def _said(name: str) -> str:
+    """The markdown of notebook ``name`` as committed (one string, lines joined by spaces): what its reader is told."""
+    path = Path(__file__).resolve().parents[1] / "notebooks" / name
+    nb = json.loads(path.read_text(encoding="utf-8"))
+    return " ".join("".join(c["source"]).replace("\n", " ") for c in nb["cells"] if c["cell_type"] == "markdown")
+
 
 def start() -> None:
     """Record every warning the notebook gives from here on (each shown as well, as the kernel would)."""
@@ -69,6 +79,17 @@ def _miso(ns: dict) -> None:
     ub = ns["data"].static.ubar
     assert abs(ns["cls"].static_curve(ub) - ns["surface"](ub)).max() < 1e-8
     assert (ns["results"].status == "ok").sum() >= 6
+    said = _said("06_miso.ipynb")
+    assert f"The static surfaces of the {_WORDS[len(ns['models'])]} models" in said
+    grid = ns["grid"]
+    assert f"{_WORDS[len(grid.structures)]} structures × {_WORDS[len(grid.variants)]} variants" in said
+    # D_SF's choices lie in the band, the direct solution on its edge (J_SF = B)
+    table, band = ns["table"], ns["BAND"]
+    assert table.loc["PE D_SF", "JSF"] <= band and table.loc["SE D_SF", "JSF"] <= band
+    assert table.loc["D_SF direct", "JSF"] > 0.99 * band
+    assert table.loc["D_SF direct", "JS_valid"] < table.loc["SE D_SF", "JS_valid"] < table.loc["PE D_SF", "JS_valid"]
+    # the quick run's: "with J_SF a quarter and a tenth of the band"
+    assert 0.15 < table.loc["PE D_SF", "JSF"] / band < 0.4 and table.loc["SE D_SF", "JSF"] / band < 0.15
 
 
 def _control(ns: dict) -> None:
