@@ -71,6 +71,13 @@ def _grid(ns: dict) -> None:
     assert any(n.startswith("pumping-quick") for n in stores), stores
     assert (ns["pumping"]["status"] == "ok").sum() >= 4 * 6  # at least 4 structures × 6 variants that ran
     assert "pumping" in ns["summary"].columns and "buck" in ns["summary"].columns
+    said = _said("05_constraint_variants.ipynb")
+    grid = ns["pumping_grid"]
+    assert f"{len(grid.structures)} structures × {len(grid.variants)} variants" in said
+    assert f"{_WORDS[len(grid.variants)].capitalize()} variants" in said
+    # "The black-box LS models never qualify: their static curves miss the points by more than 1 mlc"
+    ls = ns["pumping"][ns["pumping"]["variant"] == "LS"]
+    assert (ls["static_miss"] > 1.0).all() and "by more than 1 mlc" in said
 
 
 def _miso(ns: dict) -> None:
