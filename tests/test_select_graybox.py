@@ -796,7 +796,7 @@ def test_several_validation_and_test_records():
     assert res.chosen["JS_test"] == pytest.approx((a + b) / (na + nb), rel=1e-9)
     # the rule's scores are six blocks, three of each validation record: a row's vs_best is log(J_S / the best
     # row's J_S), J_S the blocks' mean weighted by their samples, and vs_best_se its standard error by the delta
-    # method over the six blocks (z_i = a_i / J_a - b_i / J_b)
+    # method over the six blocks (z_i = a_i / J_a - b_i / J_b, SE² = Σ w_i² z_i² / (1 - Σ w_i²))
 
     def block_js(model):
         out, n = [], []
@@ -813,7 +813,7 @@ def test_several_validation_and_test_records():
         a, _ = block_js(res.model_of(row))
         z = a / (w @ a) - b / (w @ b)
         assert res.table.loc[row, "vs_best"] == pytest.approx(np.log((w @ a) / (w @ b)), abs=1e-9)
-        assert res.table.loc[row, "vs_best_se"] == pytest.approx(np.sqrt(6 / 5 * np.sum((w * z) ** 2)), rel=1e-7)
+        assert res.table.loc[row, "vs_best_se"] == pytest.approx(np.sqrt(np.sum((w * z) ** 2) / (1 - w @ w)), rel=1e-7)
 
 
 def test_candidates_that_are_all_zero_on_the_records_are_said_by_the_search():
@@ -862,3 +862,20 @@ def test_gray_box_options_with_band_inf_say_what_band_inf_means(data, option, un
     with pytest.raises(ValueError, match=r"band=inf asks for no static requirement") as info:
         gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), d, band=np.inf, sizes=[3], **option)
     assert "no band was given" not in str(info.value)
+
+
+@pytest.mark.parametrize("lengths", [(200, 200, 200, 200, 200), (100, 100, 300, 50, 450), (20, 20, 20, 20, 920)])
+def test_the_ratio_se_is_right_in_size_for_blocks_of_unequal_length(lengths):
+    # was: SE² = n / (n - 1) Σ w_i² z_i², unbiased for equal blocks only; blocks of 20, 20, 20, 20 and 920 samples
+    # (validation records or folds of unequal length) gave an SE 0.43 of the spread of log(J_a / J_b) over draws.
+    # Blocks of independent samples: a block of n_i samples has a mean square of variance ∝ 1 / n_i; the SE's square
+    # must average the variance of the log ratio over the draws (Monte Carlo, independent of the formula)
+    from graybox.experiments._select import _ratio_se
+    rng = np.random.default_rng(1)
+    n = np.array(lengths)
+    w = n / n.sum()
+    draws = 3000
+    b = rng.chisquare(n, size=(draws, n.size)) / n  # the best row: the mean of n_i squared unit normals per block
+    a = b * rng.chisquare(n, size=(draws, n.size)) / n * 1.2
+    out = np.array([_ratio_se(a[k], b[k], w) for k in range(draws)])
+    assert np.mean(out[:, 1] ** 2) == pytest.approx(np.var(out[:, 0]), rel=0.15)
