@@ -112,7 +112,8 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
                              f"input may be: pass the input columns only, e.g. df[{rest!r}] (a time column is no "
                              "input: give its step as Ts=)")
     expected = tuple(default_input_names(len(cols)) if names is None else names)
-    hits = [c for c in labels if c in expected]
+    known = frozenset(expected)  # a Series of N samples meets N default names (u1 … uN): `in` a tuple made it N²
+    hits = [c for c in labels if c in known]
     if series and not hits and isinstance(getattr(x, "name", None), str) and x.name in expected:
         # a column of a frame (df["speed"]): its name is the input's, its labels the samples'; read as the
         # one-column frame it came from, by name (its values are that input's levels, never one point)
