@@ -148,7 +148,8 @@ class GrayboxSelection:
         same samples for all; an error below round-off, 1e-20 of the mean square output, counts as that floor), ``JSF``
         (its static error, worst fold; NaN without static points), ``in_band``, ``vs_best`` and
         ``vs_best_se`` (log of its J_S over the best row's, and that log ratio's standard error over
-        the blocks by the delta method, both rows on the same blocks), ``eligible`` (the rule could choose it), ``rank`` (1: the choice); with a test
+        the blocks by the delta method, both rows on the same blocks), ``eligible`` (the rule could choose it),
+        ``rank`` (1: the choice); with a test
         record also ``JS_test`` (its refitted model's J_S there, counted as ``JS_valid`` is: from
         the candidates' largest lag on, the same samples for every row, so it differs from
         ``graybox.js(model, test)``, which counts from the model's own largest lag, when the row's
