@@ -8,11 +8,13 @@ blocks, test untouched; the rule's inputs (each row's per-block J_S of its chose
 rule below applied to them. Nothing a rule chooses with reads the test record. Rules (eligible rows, then the
 fewest terms, ties by the smaller validation J_S):
 
-- ``log``: the mean per-block log ratio to the best row within its standard error (select_graybox's one-se);
+- ``log``: the mean per-block log ratio to the best row within its standard error (select_graybox's one-se
+  before 2026-11-29);
 - ``arith``: the mean per-block difference to the best row's J_S within its standard error (J_S's own scale);
 - ``log+arith``: both;
 - ``ratio``: log(J_S / best J_S) of the whole record within the per-block log ratios' standard error;
-- ``ratio-delta``: the same, the standard error of log(J_S / best J_S) by the delta method over the blocks;
+- ``ratio-delta``: the same, the standard error of log(J_S / best J_S) by the delta method over the blocks
+  (select_graybox's one-se since 2026-11-29; blocks of equal length here: its divisor 1 − Σ w² is n / (n − 1));
 - ``best's se``: J_S within one standard error of the best row's own J_S over the blocks (Breiman's);
 - ``min``: the smallest validation J_S.
 """
@@ -67,7 +69,7 @@ def eligible(rule: str, B: np.ndarray, w: np.ndarray, ok: np.ndarray) -> np.ndar
         ratio_ok = np.log(js / js[best]) <= np.nan_to_num(lr.std(1, ddof=1) / np.sqrt(n))
         # the delta method's standard error of log(mean a / mean b) over the blocks
         z = B / js[:, None] - B[best] / js[best]
-        delta_ok = np.log(js / js[best]) <= np.nan_to_num(z.std(1, ddof=1) / np.sqrt(n))
+        delta_ok = np.log(js / js[best]) <= np.nan_to_num(np.sqrt(((w * z) ** 2).sum(1) / (1 - w @ w)))
     e = {"log": log_ok, "arith": arith_ok, "log+arith": log_ok & arith_ok, "ratio": ratio_ok, "ratio-delta": delta_ok,
          "best's se": js <= js[best] + B[best].std(ddof=1) / np.sqrt(n), "min": js == js[best]}[rule]
     e = e & ok & np.isfinite(js)
