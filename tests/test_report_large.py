@@ -75,3 +75,20 @@ def test_structures_are_names_each_given_once(store):
         gx.plot_fronts(store, structures=[None])
     with pytest.raises(ValueError, match=r"structures names \['s1'\] more than once"):
         gx.plot_fronts(store, structures=["s1", "s0", "s1"])
+
+
+def test_the_summary_says_when_it_shows_only_the_best_five(store, tmp_path):
+    # two copies of the store compared: ten ranked models of one data set, of which summary.txt lists five
+    import shutil
+
+    other = tmp_path / "other.sqlite"
+    shutil.copy(store, other)
+    df = gx.compare_results([store, other], labels=["a", "b"])
+    lb = gx.leaderboard(df, rule="chosen")
+    assert int(lb["rank"].notna().sum()) == 10
+    text = "\n".join(_report._summary_lines(df, lb, "chosen"))
+    assert "pumping: the best 5 of 10 ranked models; every one in leaderboard.csv" in text
+    # five or fewer: all shown, nothing to say
+    alone = gb.load_results(store)
+    assert "ranked models; every one" not in "\n".join(
+        _report._summary_lines(alone, gx.leaderboard(alone, rule="chosen"), "chosen"))

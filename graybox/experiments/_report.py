@@ -1012,8 +1012,8 @@ def _replace_manifest(folder: Path, written: Sequence[Path]) -> None:
 
 def _summary_lines(df: pd.DataFrame, lb: pd.DataFrame, rule: str, attrs: Mapping | None = None,
                    band: float | Mapping[str, float] | None = None) -> list[str]:
-    """summary.txt: counts, the best five per data set (and within which band), and every reason (``attrs``: the
-    store's, default ``df.attrs``; ``band``: as given to the report)."""
+    """summary.txt: counts, the best five per data set (and how many are ranked), within which band, and every
+    reason (``attrs``: the store's, default ``df.attrs``; ``band``: as given to the report)."""
     attrs = df.attrs if attrs is None else attrs
     counts = df["status"].value_counts()
     fp = attrs.get("fingerprint")
@@ -1040,6 +1040,9 @@ def _summary_lines(df: pd.DataFrame, lb: pd.DataFrame, rule: str, attrs: Mapping
                          "fit_valid in %)")
         lines.append(sub[["JS_valid", "JSF", "fit_valid", "n_params"]].to_string() if len(sub) else
                      "  (no model qualified: the reasons follow)")
+        n_ranked = int(part["JS_valid"].notna().sum())
+        if n_ranked > len(sub):  # the rest are not dropped: say where they are
+            lines.append(f"{d}: the best {len(sub)} of {n_ranked} ranked models; every one in leaderboard.csv")
         empty = part[part["reason"] != ""]
         if len(empty):
             lines.append(f"{d}: {len(empty)} of {len(part)} (structure, variant) with no qualifying model, and why")
