@@ -92,3 +92,19 @@ def test_the_summary_says_when_it_shows_only_the_best_five(store, tmp_path):
     alone = gb.load_results(store)
     assert "ranked models; every one" not in "\n".join(
         _report._summary_lines(alone, gx.leaderboard(alone, rule="chosen"), "chosen"))
+
+
+def test_the_page_says_which_spec_its_cells_are_of(store, tmp_path):
+    # the environment's "cells shown" read "1" for a store's latest spec (one spec, 5 cells): a count, to a reader
+    import shutil
+
+    from graybox.experiments._html import report_page
+
+    def shown(df):
+        page = report_page(df, gx.leaderboard(df, rule="chosen"), rule="chosen", summary=[], figures={})
+        return page.split('cells shown</td><td class="t">')[1].split("<")[0]
+
+    assert shown(gb.load_results(store)) == "the cells of spec 1"
+    assert shown(gb.load_results(store, spec="all")) == "every cell the store holds (spec=&#x27;all&#x27;)"
+    shutil.copy(store, tmp_path / "b.sqlite")
+    assert shown(gx.compare_results([store, tmp_path / "b.sqlite"])) == "each store&#x27;s latest spec"

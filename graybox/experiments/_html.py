@@ -74,6 +74,18 @@ def _img(name: str, png: bytes) -> str:
     return f'<figure><img alt="{_e(name)}" src="data:image/png;base64,{data}"><figcaption>{_e(name)}</figcaption></figure>'
 
 
+def _selection(attrs: Mapping) -> str:
+    """Which cells the page shows, in words: a spec's number alone ("1") read as a count of cells."""
+    sel = attrs.get("selection", "latest")
+    # stores compared (their specs carry the store's label): compare_results' spec, applied to each
+    several = any("store" in s for s in attrs.get("specs") or [])
+    if sel == "all":
+        return "every cell the stores hold (spec='all')" if several else "every cell the store holds (spec='all')"
+    if sel == "latest":
+        return "each store's latest spec" if several else "the cells of the latest spec"
+    return f"the cells of spec {sel}" + (" of each store" if several else "")
+
+
 def _environment(attrs: Mapping) -> dict[str, str]:
     import matplotlib
     import numpy
@@ -83,7 +95,7 @@ def _environment(attrs: Mapping) -> dict[str, str]:
     return {"graybox (this report)": gb.__version__, "graybox (the cells)": str(attrs.get("version")),
             "python": sys.version.split()[0], "numpy": numpy.__version__, "pandas": pd.__version__,
             "matplotlib": matplotlib.__version__, "platform": platform.platform(),
-            "store": str(attrs.get("store")), "cells shown": str(attrs.get("selection", "latest")),
+            "store": str(attrs.get("store")), "cells shown": _selection(attrs),
             "written": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")}
 
 
