@@ -108,3 +108,29 @@ def test_the_page_says_which_spec_its_cells_are_of(store, tmp_path):
     assert shown(gb.load_results(store, spec="all")) == "every cell the store holds (spec=&#x27;all&#x27;)"
     shutil.copy(store, tmp_path / "b.sqlite")
     assert shown(gx.compare_results([store, tmp_path / "b.sqlite"])) == "each store&#x27;s latest spec"
+
+
+@pytest.fixture(scope="module")
+def inf_member_store(tmp_path_factory):
+    # buck's converter with a cubic term: PE's λ1 = 1 member (the least-squares end) reaches no equilibrium at a
+    # static point (J_SF = inf); the other two members are finite
+    grid = gx.Grid([gx.DataSpec("buck", bundled="buck")],
+                   [gx.StructureSpec("cub", terms=["1", "y(k-1)", "y(k-1)^3", "u(k-1)", "y(k-2)^2"])],
+                   [gx.Variant("PE", "pe", lambdas=[1e-4, 0.01, 1.0])], name="inf member")
+    path = tmp_path_factory.mktemp("inf") / "inf.sqlite"
+    gx.run_grid(grid, path, progress=False)
+    return path
+
+
+def test_the_fronts_say_how_many_models_a_panel_leaves_out(inf_member_store):
+    import numpy as np
+
+    m = gb.load_results(inf_member_store)["members"][0]
+    jsf = np.asarray(m["JSF"], float)
+    assert jsf.size == 3 and int(np.isinf(jsf).sum()) == 1  # the store's own: one member without a static curve
+    fig = gx.plot_fronts(inf_member_store)
+    assert fig.axes[0].get_title() == "cub\n(1 of 3 models not drawn: J_S or J_SF not finite)"
+
+
+def test_the_fronts_of_finite_models_are_titled_by_their_structure_alone(store):
+    assert [ax.get_title() for ax in gx.plot_fronts(store).axes if ax.get_visible()] == [f"s{i}" for i in range(5)]

@@ -669,7 +669,9 @@ def plot_fronts(
     """Fronts (J_S on the validation record against J_SF) of every variant, one panel per structure.
 
     Pareto variants draw all their members (the non-dominated ones joined by a line) and their
-    chosen member as a large marker; one-model variants draw their model as a large marker.
+    chosen member as a large marker; one-model variants draw their model as a large marker. A panel's
+    title counts the models it cannot draw (J_S or J_SF inf, e.g. a member that reaches no
+    equilibrium at a static point).
 
     Parameters
     ----------
@@ -706,6 +708,7 @@ def plot_fronts(
         drawn = False
         xs: list[np.ndarray] = []
         ys: list[np.ndarray] = []
+        models = hidden = zero = 0  # the panel's models, those it cannot draw, and of those the finite ones (J 0)
         for v in variants:
             g = sub[(sub["structure"] == s) & (sub["variant"] == v)]
             for _, r in g.iterrows():
@@ -713,6 +716,9 @@ def plot_fronts(
                 if isinstance(m, Mapping) and len(m.get("JSF", ())):
                     x, y = np.asarray(m["JS_valid"], float), np.asarray(m["JSF"], float)
                     ok = _finite_pos(x) & _finite_pos(y)
+                    models += ok.size
+                    hidden += int((~ok).sum())
+                    zero += int((~ok & np.isfinite(x) & np.isfinite(y)).sum())
                     if ok.any():
                         ax.plot(x[ok], y[ok], "o", ms=3, alpha=0.4, color=colors[v])
                         o = np.argsort(x[ok])
@@ -723,6 +729,11 @@ def plot_fronts(
                         ys.append(y[ok])
                         drawn = True
                         seen.add(v)
+                elif r["status"] in ("ok", "diverged"):  # a single model (a diverged one: J_S inf)
+                    models += 1
+                    xy = np.array([r["JS_valid"], r["JSF"]], float)
+                    hidden += int(not _finite_pos(xy).all())
+                    zero += int(np.isfinite(xy).all() and not _finite_pos(xy).all())
                 if r["status"] == "ok" and _finite_pos([r["JS_valid"]])[0] and _finite_pos([r["JSF"]])[0]:
                     ax.plot([r["JS_valid"]], [r["JSF"]], "*" if isinstance(m, Mapping) else "D", ms=11,
                             mec="k", color=colors[v], zorder=5)
@@ -740,7 +751,9 @@ def plot_fronts(
                     transform=ax.transAxes, ha="center", va="center", color="0.4", fontsize=8)
             ax.set_xticks([])
             ax.set_yticks([])
-        ax.set_title(_shown(s))
+        # a model left out is said, not dropped without a word (a member without a static curve: J_SF inf)
+        ax.set_title(_shown(s) + (f"\n({hidden} of {models} models not drawn: J_S or J_SF not finite"
+                                  f"{' or 0' if zero else ''})" if drawn and hidden else ""))
         ax.set_xlabel(f"J_S on the validation record{_sq(df, d)}")
         ax.set_ylabel(f"J_SF{_sq(df, d)}")
         ax.grid(True, which="major", alpha=0.3)
