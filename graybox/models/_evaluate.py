@@ -56,17 +56,29 @@ def _measured_and_model(y: object, yhat: object, start: object) -> tuple[np.ndar
     return y[start:], yhat[start:]
 
 
-def mse(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
-    """Mean squared error of ``yhat`` against ``y`` over samples ``start …``; inf if ŷ is not finite.
-
-    Parameters
+#: The Parameters section of the scores of a measured output against a model's (:func:`mse`, :func:`rrse`,
+#: :func:`fit_percent`): one text, put in each docstring by :func:`_scores_samples`.
+_Y_YHAT_START = """Parameters
     ----------
     y : ndarray, shape (N,)
         The measured output (finite; output units).
     yhat : ndarray, shape (N,)
         The model's output on the same samples (NaN or inf where its free run diverged).
     start : int
-        The first sample counted (default 0; a model's largest lag, as :func:`js` counts); ``start < N``.
+        The first sample counted (default 0; a model's largest lag, as :func:`js` counts); ``start < N``."""
+
+
+def _scores_samples(fn):
+    """Put the shared Parameters section into ``fn``'s docstring (its marker line)."""
+    fn.__doc__ = fn.__doc__.replace("__Y_YHAT_START__", _Y_YHAT_START)
+    return fn
+
+
+@_scores_samples
+def mse(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
+    """Mean squared error of ``yhat`` against ``y`` over samples ``start …``; inf if ŷ is not finite.
+
+    __Y_YHAT_START__
 
     Returns
     -------
@@ -158,17 +170,11 @@ def jsf(model: Model, static: StaticPoints | Dataset, y0: float | np.ndarray | N
     return mse(static.ybar, yb)
 
 
+@_scores_samples
 def rrse(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
     """Root relative squared error ‖y − ŷ‖ / ‖y − mean(y)‖ over samples ``start …``.
 
-    Parameters
-    ----------
-    y : ndarray, shape (N,)
-        The measured output (finite; output units).
-    yhat : ndarray, shape (N,)
-        The model's output on the same samples (NaN or inf where its free run diverged).
-    start : int
-        The first sample counted (default 0; a model's largest lag, as :func:`js` counts); ``start < N``.
+    __Y_YHAT_START__
 
     Returns
     -------
@@ -200,17 +206,11 @@ def _relative_error(y: object, yhat: object, start: object, what: str) -> float:
         return float(scaled_norm(y - yhat) / den)  # in the output's own scale, as den is: the same in any units
 
 
+@_scores_samples
 def fit_percent(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
     """MATLAB ``compare`` fit: 100 (1 − ‖y − ŷ‖ / ‖y − mean(y)‖), in percent.
 
-    Parameters
-    ----------
-    y : ndarray, shape (N,)
-        The measured output (finite; output units).
-    yhat : ndarray, shape (N,)
-        The model's output on the same samples (NaN or inf where its free run diverged).
-    start : int
-        The first sample counted (default 0; a model's largest lag, as :func:`js` counts); ``start < N``.
+    __Y_YHAT_START__
 
     Returns
     -------
