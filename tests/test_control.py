@@ -663,8 +663,8 @@ def _settling_by_hand(a: list[float], b: float, band: float, n: int) -> float:
 def test_settling_time_is_not_held_up_by_the_round_off_of_the_step_response():
     # the step response was run to its final value and compared with g: where 1 − Σa is small its floating-point
     # limit sits off g by eps / (1 − Σa), and a band under a thousand times that never 'settled'. a = (1.5, −0.5001):
-    # the 1e-9 band, entered for good after 103566 samples, gave inf; y(k) = 0.3 y(k-1) + 0.7 u(k-1) with the band 1e-16 gave
-    # the end of the window run, 41 samples for 31 (hunt59a)
+    # the 1e-9 band, entered for good after 103566 samples, gave inf; y(k) = 0.3 y(k-1) + 0.7 u(k-1) with the band
+    # 1e-16 gave the end of the window run, 41 samples for 31 (hunt59a)
     slow = gb.LocalModel(np.array([0.0]), 0.0, "reached", "", np.array([1.5, -0.5001]), np.array([[0.3]]), 1.0, ("u",))
     for band in (1e-6, 1e-9, 1e-12):
         assert slow.settling_time(band=band) == _settling_by_hand([1.5, -0.5001], 0.3, band, 400_000)

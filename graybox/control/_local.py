@@ -511,7 +511,8 @@ def require_control() -> Any:
     parts = tuple(int(p) for p in re.findall(r"\d+", version)[:2])
     if len(parts) == 2 and parts < CONTROL_MIN:
         raise ImportError(f"this needs python-control {CONTROL_MIN[0]}.{CONTROL_MIN[1]} or later (the 'control' "
-                          f"extra), found {version}: upgrade it, {CONTROL_EXTRA.replace('pip install', 'pip install -U')}")
+                          f"extra), found {version}: upgrade it, "
+                          f"{CONTROL_EXTRA.replace('pip install', 'pip install -U')}")
     return control
 
 

@@ -159,8 +159,8 @@ class CorrelationTest(Relocked):
     excess_kurtosis, skewness : float
         N times the excess kurtosis, and √N times the skewness, of φ at a lag were the test's two sequences a
         and b independent: (κ_a − 3)(κ_b − 3) − 6 and γ_a γ_b from their own kurtosis and skewness (−6 where
-        either is Gaussian; 0 in a file of an older graybox: the Bonferroni limit either way). They set the simultaneous rule's tail correction (see the
-        module docstring).
+        either is Gaussian; 0 in a file of an older graybox: the Bonferroni limit either way). They set the
+        simultaneous rule's tail correction (see the module docstring).
     """
 
     name: str

@@ -25,9 +25,10 @@ def plot_selection(selection: GrayboxSelection, *, axes: Sequence[Axes] | None =
     """Every row :func:`graybox.select_graybox` compared, against its number of terms, in two or three panels.
 
     1. **The rule.** Each row's J_S on the choosing data over the best row's (dimensionless, 1 = the
-       best row) with ± one standard error of that ratio's log over the blocks. A row whose bar reaches 1 (or lies below it) is within one
-       standard error of the best: eligible, drawn filled (hollow otherwise); ``rule="one-se"`` takes
-       the fewest terms among them. Rows without a qualifying model are left out and counted.
+       best row) with ± one standard error of that ratio's log over the blocks. A row whose bar reaches 1
+       (or lies below it) is within one standard error of the best: eligible, drawn filled (hollow
+       otherwise); ``rule="one-se"`` takes the fewest terms among them. Rows without a qualifying model are
+       left out and counted.
     2. **The static error.** J_SF of each row's member (output units²), the band B shaded (gray
        boxes; left out when no row has a J_SF, as for a black box without static points).
     3. **The test record**, when the selection was given one: each row's J_S there (output

@@ -355,7 +355,8 @@ _FAR_FROM_ZERO = 100.0
 def offset_note(data: object, process: Structure) -> str:
     """For an uncentred search that ran out of independent terms: a sentence naming the signals (y and the inputs
     ``process`` uses) whose mean over ``data`` exceeds :data:`_FAR_FROM_ZERO` times their spread (none held at one
-    level: :func:`is_held`), and pointing to ``centre=True``; ``""`` when none does (or the data are Dask records, which centre=True does not take)."""
+    level: :func:`is_held`), and pointing to ``centre=True``; ``""`` when none does (or the data are Dask records,
+    which centre=True does not take)."""
     if is_dask_data(data):
         return ""
     records = as_records(data)
