@@ -44,13 +44,15 @@ def signal_offsets(data: object) -> dict[str, float]:
     if is_dask_data(data):
         raise ValueError("centre=True needs the records in memory (a DaskRecord is not centred); "
                          "subtract the means yourself, or leave centre out")
+    return {name: _centre_of(x) for name, x in pooled_signals(data).items()}
+
+
+def pooled_signals(data: object) -> dict[str, np.ndarray]:
+    """``{"y": y, name: that input, ...}``, each pooled over every sample of every record of ``data`` (in memory)."""
     records = as_records(data)
-    names = records[0].input_names
-    ys = np.concatenate([r.y for r in records])
     us = np.concatenate([r.u.reshape(len(r.y), -1) for r in records])
-    offsets = {"y": _centre_of(ys)}
-    offsets.update({n: _centre_of(us[:, i]) for i, n in enumerate(names)})
-    return offsets
+    return {"y": np.concatenate([r.y for r in records]),
+            **{n: us[:, i] for i, n in enumerate(records[0].input_names)}}
 
 
 def _centre_of(x: np.ndarray) -> float:
@@ -359,11 +361,7 @@ def offset_note(data: object, process: Structure) -> str:
     which centre=True does not take)."""
     if is_dask_data(data):
         return ""
-    records = as_records(data)
-    names = records[0].input_names
-    signals = {"y": np.concatenate([r.y for r in records])}
-    us = np.concatenate([r.u.reshape(len(r.y), -1) for r in records])
-    signals.update({n: us[:, i] for i, n in enumerate(names) if n in process.input_names})
+    signals = {n: x for n, x in pooled_signals(data).items() if n == "y" or n in process.input_names}
     far = []
     with np.errstate(invalid="ignore", over="ignore"):
         for name, x in signals.items():
