@@ -705,11 +705,12 @@ def check_Ts(Ts: float | None, data: object, model: Model, takes_data: bool = Tr
     # the data the model was identified on say its period too: a Ts= they contradict (50 meant as ms beside records
     # at 0.05 s) is refused as the model's own is; records made without Ts= (1 s) are relabelled by it, as its 1 s is
     # (beside a model of known period too: Ts= given its own, records without Ts= were refused by the model's check)
-    if recs is not None and recs[0].Ts != 1.0 and known:
-        model.check_period(recs[0])
-    elif recs is not None and recs[0].Ts != 1.0:
-        check_period(Ts, f"Ts = {Ts:.9g} s was given: the model runs", recs[0],
-                     "; leave Ts= out to take the data's period")
+    if recs is not None and recs[0].Ts != 1.0:
+        if known:
+            model.check_period(recs[0])
+        else:
+            check_period(Ts, f"Ts = {Ts:.9g} s was given: the model runs", recs[0],
+                         "; leave Ts= out to take the data's period")
     return Ts
 
 
