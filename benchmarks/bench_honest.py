@@ -88,6 +88,10 @@ def _tank_pump(u):
     return 3.2 * np.maximum(u - 1.0, 0.0) ** 1.3
 
 
+#: The cascaded tanks' Torricelli outflow coefficients (upper, lower tank) and their cross-section.
+_TANK_OUT, _TANK_AREA = (0.45, 0.38), 0.6
+
+
 def _tanks(seed, n):
     """A plant no default or study of graybox was tuned on (added 2026-11-29): two cascaded tanks, pump voltage
     u (V) to the lower tank's level y (cm), Torricelli outflows, sampled every 2 s (Euler steps of 0.1 s), a slow
@@ -98,7 +102,7 @@ def _tanks(seed, n):
     while len(levels) < n:
         levels += [rng.uniform(2.0, 5.0)] * int(rng.integers(15, 60))
     u = np.array(levels[:n])
-    a1, a2, area = 0.45, 0.38, 0.6
+    (a1, a2), area = _TANK_OUT, _TANK_AREA
     q = _tank_pump(u[0])
     h1, h2, d = (q / a1) ** 2, (q / a2) ** 2, 0.0
     y = np.empty(n)
@@ -114,7 +118,7 @@ def _tanks(seed, n):
 def _tank_points():
     """The tanks' static test: 9 levels over [1.5, 5.5] V, beyond the records' range, 0.05 cm of noise."""
     ub = np.linspace(1.5, 5.5, 9)
-    yb = (_tank_pump(ub) / 0.38) ** 2 + 0.05 * np.random.default_rng(0).standard_normal(9)
+    yb = (_tank_pump(ub) / _TANK_OUT[1]) ** 2 + 0.05 * np.random.default_rng(0).standard_normal(9)
     return gb.StaticPoints(ub, yb, units=("V", "cm"))
 
 
