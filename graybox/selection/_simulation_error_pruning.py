@@ -648,14 +648,14 @@ def _prune(run: _Search, added: int) -> None:
         run.move("remove", removable[i], nxt, trial[i], float(s_r[i]))
 
 
-def _result(run: _Search, stop: str, capped: bool, data: object = None) -> SEMPResult:
+def _result(run: _Search, stop: str, capped: bool, data: object) -> SEMPResult:
     """The structure of the path that the stopping rule chooses (warning as frols does), as a SEMPResult; ``data``,
     the raw records, for the offsets' note where the size asked was not reached."""
     opt, sc = run.opt, run.sc
     path = pd.DataFrame(run.rows)
     if opt.mode == "n_terms" and not (path["n_terms"] == opt.n_terms).any():
         # as frols says: offsets make the raw monomials collinear, the likely cause (centre=True reaches the size)
-        note = "" if data is None else _centring.offset_note(data, opt.process)
+        note = _centring.offset_note(data, opt.process)
         raise ValueError(f"the search never reached {opt.n_terms} terms ({stop})" + (f"; {note}" if note else ""))
     # the same rule as frols: the size asked for, the smallest model within the tolerance, or the
     # criterion's minimum (warning when the size limit cut the curve or the search short)
