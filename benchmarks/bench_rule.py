@@ -1,6 +1,7 @@
 """The choosing rule of select_graybox against alternatives, on the same scores (issue 26).
 
     .venv/bin/python benchmarks/bench_rule.py [--cases plant,buck,...] [--tank-draws 3]
+    .venv/bin/python benchmarks/bench_rule.py --first-draw 8 --tank-draws 8 --synthetic-draws 4   # fresh draws
 
 Each case of bench_honest (and more draws of its cascaded tanks) runs ``select_graybox`` once for the gray box
 (the case's band) and once for the black box (no band), fit on identification, choose on the validation record's
@@ -115,16 +116,20 @@ def main() -> None:
     ap.add_argument("--tank-draws", type=int, default=3, help="draws of the cascaded tanks (bench_honest's the first)")
     ap.add_argument("--blocks", type=int, default=None, help="select_graybox's blocks= (default: its own, 5)")
     ap.add_argument("--synthetic-draws", type=int, default=1, help="draws of each synthetic case (likewise)")
+    ap.add_argument("--first-draw", type=int, default=0,
+                    help="0: bench_honest's cases and the draws after them; k > 0: only fresh draws k, k + 1, … of the "
+                         "tanks and the synthetic cases (seeds no rule was chosen on: the rule landed on draws < 8)")
     args = ap.parse_args()
     names = [c for c in args.cases.split(",") if c]
     print(f"# bench_rule ({datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC, git {git_rev()}, "
           f"blocks={args.blocks}): {machine()}", flush=True)
     warnings.simplefilter("ignore")
-    cases = bench_honest.cases()
-    for k in range(1, args.tank_draws):
+    first = max(args.first_draw, 1)
+    cases = bench_honest.cases() if args.first_draw == 0 else {}
+    for k in range(first, first + args.tank_draws - (args.first_draw == 0)):
         cases[f"cascaded tanks, draw {k + 1}"] = tank_case(k)
     for name in SYNTHETIC:
-        for k in range(1, args.synthetic_draws):
+        for k in range(first, first + args.synthetic_draws - (args.first_draw == 0)):
             cases[f"{name}, draw {k + 1}"] = synthetic_case(name, k)
     out = []
     for name, (data, test, cand, band) in cases.items():
