@@ -453,3 +453,27 @@ def test_an_equilibrium_beyond_the_float_range_is_not_said_to_be_no_root_at_all(
     assert m.equilibria(1e308) == [] and m.equilibria(1e307)[0].ybar == pytest.approx(2e307)
     with pytest.raises(ValueError, match="no real root within the float range"):
         m.static_curve([1e308])
+
+
+def test_an_equilibrium_in_the_float_range_is_found_where_the_input_power_alone_leaves_it():
+    # the static equation's coefficient σ ū^m was taken as σ · (ū^m): y = 0.5 y + 1e-300 u² at ū = 1e200 (ū² = 1e400,
+    # no float) was refused as having 'no real root within the float range', where its root is 2e100, and at the
+    # other end y = 0.5 y + 1e300 u² at ū = 1e-200 (ū² = 0 in floats) gave ȳ = 0, silently, for 2e-100. The same
+    # model in other units (u' = u / 1e200, θ' = θ · 1e400) found both: a result that depended on the units
+    import warnings
+
+    import graybox as gb
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for th, ub, yb in ((1e-300, 1e200, 2e100), (1e300, 1e-200, 2e-100)):
+            for extra, ex_th in (([], []), (["y(k-1)^2"], [-1e-300 if ub < 1 else -1e-200])):
+                m = gb.Model(["y(k-1)", "u(k-1)^2"] + extra, [0.5, th] + ex_th)
+                near = [e for e in m.equilibria(ub) if e.stable]
+                assert len(near) == 1 and near[0].ybar == pytest.approx(yb, rel=1e-9), (extra, ub, near)
+                assert m.static_curve([ub])[0] == pytest.approx(yb, rel=1e-9)
+        # two inputs (the surface folds θ_t ū^a): y = 0.5 y + 1e-300 u1² + u2 at (1e200, 1) and (1e-200, 1)
+        m = gb.Model(["y(k-1)", "u1(k-1)^2", "u2(k-1)"], [0.5, 1e-300, 1.0])
+        assert m.static_curve([[1e200, 1.0]])[0] == pytest.approx(2e100, rel=1e-9)
+        m = gb.Model(["y(k-1)", "u1(k-1)^2", "u2(k-1)"], [0.5, 1e300, 1e-100])
+        assert m.static_curve([[1e-200, 1.0]])[0] == pytest.approx(2e-100 + 2e-100, rel=1e-9)

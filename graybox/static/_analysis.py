@@ -73,7 +73,7 @@ from ..core._validation import (Relocked, as_1d_finite, check_bool, check_fields
                                 check_theta, locked, real_array)
 from ..core._reprs import LISTED, exact_text, point_texts, short_repr
 from ._linearisation import (characteristic_roots, derivative_map, grid_coefficients, static_gains, static_powers,
-                             static_theta_gradient_of)
+                             static_theta_gradient_of, times_power)
 
 __all__ = [
     "cluster_key",
@@ -298,7 +298,7 @@ def _static_terms(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) ->
     size = np.zeros_like(coef)
     with np.errstate(all="ignore"):
         for c, (p, m) in enumerate(cm.keys):
-            term = sig[:, c, None] * ub[None, :] ** m
+            term = times_power(sig[:, c, None], ub[None, :], m)  # σ ū^m in range where ū^m alone is not
             coef[p] += term
             size[p] += np.abs(term)
     coef[1] -= 1.0
@@ -821,7 +821,7 @@ def _rational_terms(structure: Structure, thetas: np.ndarray, ubar: np.ndarray):
     size = np.ones_like(num)
     with np.errstate(all="ignore"):
         for c, (p, m) in enumerate(cm.keys):
-            term = sig[..., c, None] * ub**m
+            term = times_power(sig[..., c, None], ub, m)
             if p == 0:
                 num += term
             else:
