@@ -477,3 +477,23 @@ def test_an_equilibrium_in_the_float_range_is_found_where_the_input_power_alone_
         assert m.static_curve([[1e200, 1.0]])[0] == pytest.approx(2e100, rel=1e-9)
         m = gb.Model(["y(k-1)", "u1(k-1)^2", "u2(k-1)"], [0.5, 1e300, 1e-100])
         assert m.static_curve([[1e-200, 1.0]])[0] == pytest.approx(2e-100 + 2e-100, rel=1e-9)
+
+
+def test_an_equilibrium_in_the_float_range_is_found_where_a_coefficient_of_its_equation_leaves_it():
+    # y = 0.5 y + 1e-10 y u + 10 u at ū = 1e308: the numerator 10 ū = 1e309 of eq. (6) is no float, its denominator
+    # 1 − 0.5 − 1e-10 ū = −1e298 is, and the equilibrium −1e11 lies well inside the float range; it was refused as
+    # 'no real root within the float range'. Read over a power of two common to the level's coefficients it is found
+    # (unstable: a_1 = 0.5 + 1e298); with a small y² term, the polynomial path alike
+    import warnings
+
+    import graybox as gb
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for extra, th in (([], []), (["y(k-1)^2"], [-1e-300])):
+            m = gb.Model(["y(k-1)", "y(k-1)u(k-1)", "u(k-1)"] + extra, [0.5, 1e-10, 10.0] + th)
+            eq = [e for e in m.equilibria(1e308) if abs(e.ybar) < 1e300]
+            assert len(eq) == 1 and eq[0].ybar == pytest.approx(-1e11, rel=1e-9)  # 10 ū / (1 − 0.5 − 1e-10 ū)
+            assert not eq[0].stable
+            # in range the coefficients are as they were: the same model at ū = 1e290
+            assert m.equilibria(1e290)[0].ybar == pytest.approx(1e291 / (0.5 - 1e280), rel=1e-9)
