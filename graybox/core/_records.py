@@ -19,8 +19,8 @@ import numpy as np
 
 from ._reprs import listed, range_text
 from ._terms import check_input_names, default_input_names, missing_input_hint, transient_source
-from ._validation import (Relocked, as_1d_finite, locked, check_int, check_ordered, check_per_point, check_real,
-                          check_str, float_array, frozen_value, refuse_non_real, warn)
+from ._validation import (SAMPLES, Relocked, as_1d_finite, locked, check_int, check_ordered, check_per_point,
+                          check_real, check_str, float_array, frozen_value, refuse_flags, refuse_non_real, warn)
 
 __all__ = ["Record", "StaticPoints", "StaticRangeWarning", "warn_static_range"]
 
@@ -155,6 +155,7 @@ def as_input_array(x: object, name: str, names: Sequence[str] | None = None, *, 
     """
     x = frame_inputs(x, names, name, output)
     refuse_non_real(x, name)
+    refuse_flags(x, name, SAMPLES, none=False)  # an on/off input's True read as 1 is the caller's to say
     a = float_array(x, name)
     if a.ndim == 2 and a.shape[1] == 1:
         a = a[:, 0].copy()
