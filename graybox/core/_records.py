@@ -38,7 +38,8 @@ def _is_series(x: object) -> bool:
 def labelled_point(x: object, names: Sequence[str]) -> bool:
     """Whether ``x`` is a pandas Series whose index labels are the inputs ``names`` (a DataFrame's row): one
     point ū by what it says, never levels of one input, whatever its values."""
-    return _is_series(x) and sorted(str(c) for c in x.index) == sorted(names)  # type: ignore[attr-defined]
+    return (_is_series(x) and len(x) == len(names)  # type: ignore[arg-type]
+            and sorted(str(c) for c in x.index) == sorted(names))  # type: ignore[attr-defined]
 
 
 def output_series(y: object) -> object | None:
@@ -90,6 +91,13 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
     label = None if named is None else named.name  # type: ignore[attr-defined]
     if series and label is not None and getattr(x, "name", None) == label and _same_samples(x, output):
         raise ValueError(f"{name}: {label!r} is both the input and the output; pass the input column as u")
+    if series and getattr(getattr(x.index, "dtype", None), "kind", "O") in "iufcmMb":
+        # labels of numbers or times (a RangeIndex of 10⁶ samples): none is an input's name, an identifier, so none
+        # is read one by one (as a DataFrame's columns are not), nor are N default names built to meet them
+        said = getattr(x, "name", None)
+        if isinstance(said, str) and (said in names if names is not None else _default_name(said, len(x))):
+            return frame_inputs(x.to_frame(), names, name, output, steady=steady)  # a column, read as below
+        return x
     cols = list(x.index if series else x.columns)
     labels = [str(c) for c in cols]
     what = "Series' index labels" if series else "DataFrame's columns"
@@ -141,6 +149,15 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
     raise ValueError(f"{name}: the {what} {labels} {said} "
                      f"(not inputs: {extra or 'none'}; inputs without a column: {missing or 'none'}; repeated: "
                      f"{repeated or 'none'}): read by position they would land on other inputs. {fix}")
+
+
+def _default_name(label: str, m: int) -> bool:
+    """Whether ``label`` is one of the default names of ``m`` inputs (``label in default_input_names(m)``, told
+    without making the m names)."""
+    if m == 1:
+        return label == "u"
+    k = label[1:]
+    return label[:1] == "u" and k.isascii() and k.isdigit() and k[0] != "0" and 1 <= int(k) <= m
 
 
 def as_input_array(x: object, name: str, names: Sequence[str] | None = None, *, output: object = None,
