@@ -65,8 +65,43 @@ def _varies(y: object) -> bool:
     return a.size > 1 and bool(np.any(a != a.flat[0]))
 
 
+def _time_step(x: object) -> float | None:
+    """The step of a column that looks like time or a count of samples (at least 3 values, strictly increasing, in
+    steps equal to 1e-6 of theirs: a clock's seconds written out keep that), else None. Numbers only: dates and text
+    are refused as such where they are read (:func:`~graybox.core._validation.refuse_non_real`)."""
+    if getattr(getattr(x, "dtype", None), "kind", "") not in "iuf":
+        return None
+    try:
+        a = np.asarray(x, dtype=float)
+    except (TypeError, ValueError):
+        return None
+    if a.ndim != 1 or a.size < 3 or not np.all(np.isfinite(a)):
+        return None
+    d = np.diff(a)
+    step = float(np.mean(d))
+    return step if d.min() > 0 and d.max() - d.min() <= 1e-6 * step else None
+
+
+def _refuse_time_column(x: Any, cols: list, labels: list[str], expected: Sequence[str], name: str) -> None:
+    """``ValueError`` naming the one column of the DataFrame of samples ``x`` that names no input and looks like time
+    (:func:`_time_step`) where the others do not: read by position it was an input, and the record failed later, on
+    the inputs' names. Two or more such columns are ramps (a synthetic test's inputs), none of them told from time."""
+    if not all(getattr(k, "kind", "") in "iuf" for k in x.dtypes):
+        return  # a column of dates or text is refused as such (refuse_non_real), beside whatever ramps
+    steps = [_time_step(x[c]) for c in cols]
+    found = [i for i, step in enumerate(steps) if step is not None]
+    if len(found) == 1 and labels[found[0]] not in expected:
+        label, step = labels[found[0]], steps[found[0]]
+        rest = [l for l in labels if l != label]
+        raise ValueError(f"{name}: column {label!r} of the DataFrame's columns {labels} looks like time or a count of "
+                         f"samples (strictly increasing in even steps of {step:g}), which is no input: pass the input "
+                         f"columns only, e.g. df[{rest!r}], with its step as Ts={step:g} "
+                         f"(graybox.load_record_csv(path, u=..., y=..., time={label!r}) reads a file's time column so); "
+                         f"if it is an input that ramps, name the columns as the inputs, input_names={labels!r}")
+
+
 def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: object = None, *,
-                 steady: bool = False) -> object:
+                 steady: bool = False, samples: bool = False) -> object:
     """A DataFrame of inputs with its columns in the order of ``names`` (the one rule for every input).
 
     Columns named exactly as the inputs (every name once, no other column) are read by name, reordered as
@@ -82,7 +117,9 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
     points pass a named Series or None: a few ȳ may equal an input's levels by the plant's own law (a unit gain).
     ``steady``: ``x`` is steady-state levels, where the transient inputs among ``names`` rest at 0 and may be left
     out (:func:`~graybox.core._transient.steady_levels` fills them in): columns naming every other input are read
-    by name too, in their order.
+    by name too, in their order. ``samples``: ``x`` is samples in time (a record's, a free run's), where the one
+    column that looks like time or a count of samples (strictly increasing in even steps; the others not) is refused
+    unless it names an input, naming it: read by position it would be an input.
     """
     series = _is_series(x)
     if not (series or is_frame(x)):
@@ -120,6 +157,8 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
                              f"input may be: pass the input columns only, e.g. df[{rest!r}] (a time column is no "
                              "input: give its step as Ts=)")
     expected = tuple(default_input_names(len(cols)) if names is None else names)
+    if samples and not series and len(cols) > 1:
+        _refuse_time_column(x, cols, labels, expected, name)
     known = frozenset(expected)  # a Series of N samples meets N default names (u1 … uN): `in` a tuple made it N²
     hits = [c for c in labels if c in known]
     if series and not hits and isinstance(getattr(x, "name", None), str) and x.name in expected:
@@ -170,7 +209,7 @@ def as_input_array(x: object, name: str, names: Sequence[str] | None = None, *, 
     (:func:`frame_inputs`; ``output``, the output as a named Series, never an input). A non-finite value is
     said by its ``row`` (``"sample"``, ``"point"``; counted from 0) and its input's name.
     """
-    x = frame_inputs(x, names, name, output)
+    x = frame_inputs(x, names, name, output, samples=row == "sample")
     refuse_non_real(x, name)
     refuse_flags(x, name, SAMPLES, none=False)  # an on/off input's True read as 1 is the caller's to say
     a = float_array(x, name)
