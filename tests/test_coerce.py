@@ -430,3 +430,31 @@ def test_a_series_of_samples_meets_no_list_of_default_names_as_long_as_itself(mo
     rec = gb.Record(u, np.cos(np.arange(5000.0)), Ts=0.1)
     np.testing.assert_array_equal(rec.u, u.to_numpy())
     assert max(made, default=0) < 100
+
+
+_RUN = np.linspace(0.0, 1.0, 8)
+_ONE = gb.Structure(["y(k-1)", "u(k-1)"])
+
+
+@pytest.mark.parametrize("call", [
+    lambda u: gb.Model(_ONE, [0.5, 1.0]).simulate(u, y0=[0.0]),
+    lambda u: gb.simulate(_ONE, [0.5, 1.0], u, y0=[0.0]),
+    lambda u: gb.regressor_matrix(_ONE, u, _RUN ** 2),
+    lambda u: gb.Record(u, _RUN ** 2),
+])
+@pytest.mark.parametrize("stacked", [lambda: [_RUN, _RUN], lambda: np.array([_RUN, 2 * _RUN]), lambda: [list(_RUN)]])
+def test_samples_stacked_as_rows_are_one_error_naming_both_readings(call, stacked):
+    """[u, u] (two equal-length arrays) was read as 2 samples of 8 inputs by a free run ("the structure uses input
+    'u', but u's 8 columns are the inputs ('u1', …, 'u8')"), as 2 samples against 8 outputs by the regressors, as
+    rows of inputs by Record: one rule now, fewer samples than inputs, its error naming both readings (mend60g)."""
+    with pytest.raises(ValueError, match=r"u has shape \((1|2), 8\), one row per input: .*shape \(8, (1|2)\).*\.T.*"
+                                         r"(1|2) separate run\(s\) of one input: pass them one at a time"):
+        call(stacked())
+
+
+def test_inputs_as_columns_and_a_list_of_rows_are_read_as_before():
+    rows = [[a, b] for a, b in zip(_RUN, 2 * _RUN)]  # one row per sample, as numpy reads it
+    two = gb.Model(gb.Structure(["y(k-1)", "u1(k-1)", "u2(k-1)"]), [0.5, 1.0, 1.0])
+    np.testing.assert_array_equal(two.simulate(rows, y0=[0.0]), two.simulate(np.column_stack([_RUN, 2 * _RUN]),
+                                                                              y0=[0.0]))
+    assert gb.Record(np.ones((1, 1)), [1.0]).n_inputs == 1  # one sample of one input: no more inputs than samples

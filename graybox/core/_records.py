@@ -220,6 +220,14 @@ def as_input_array(x: object, name: str, names: Sequence[str] | None = None, *, 
     if a.ndim != 2:
         raise ValueError(f"{name} must be 1-D (one input) or 2-D of shape (N, m) (m inputs), got {a.ndim}-D "
                          f"with shape {a.shape}")
+    if row == "sample" and 0 < a.shape[0] < a.shape[1] and not is_frame(x):
+        # [u1, u2] (or np.array of it): numpy's rows are samples, so 2 samples of N inputs; the one rule of every
+        # entry that takes samples (a free run said N inputs u1 … uN, the regressors 2 samples against N outputs)
+        k, n = a.shape
+        raise ValueError(f"{name} has shape {a.shape}, one row per input: give one column per input, shape ({n}, {k}) "
+                         f"(the transpose, x.T, or np.column_stack of the inputs). Or {k} separate run(s) of one "
+                         f"input: pass them one at a time (a Record each). (As numpy reads it, {k} sample(s) of {n} "
+                         "inputs: fewer samples than inputs)")
     if a.shape[1] == 0:
         raise ValueError(f"{name} has no input column (shape {a.shape}); for output-only data (a structure "
                          "without input terms) pass a column of zeros")
