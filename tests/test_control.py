@@ -671,3 +671,17 @@ def test_settling_time_is_not_held_up_by_the_round_off_of_the_step_response():
     fast = gb.LocalModel(np.array([0.0]), 0.0, "reached", "", np.array([0.3]), np.array([[0.7]]), 1.0, ("u",))
     for band in (0.02, 1e-6, 1e-12, 1e-16, 1e-17):  # the first k with 0.3^k <= band
         assert fast.settling_time(band=band) == np.ceil(np.log(band) / np.log(0.3))
+
+
+def test_a_transient_inputs_level_other_than_0_is_refused_alike_by_every_steady_state_entry():
+    """local_model took ū = (1, z̄ = 0.3) and gave a local model at ȳ = 3.2, an equilibrium the plant never rests at
+    (a transient input is 0 at every steady state), where narx_steady_state refused the same ū: one check now
+    (mend60g)."""
+    model = gb.Model(gb.Structure(["y(k-1)", "u(k-1)", "u_tau30(k-1)"]), [0.5, 1.0, 2.0])
+    for call in (lambda ub: gb.local_model(model, ub, Ts=1.0), lambda ub: gb.narx_steady_state(model, ub, 2.0),
+                 lambda ub: gb.operating_curve(model, [ub, [2.0, 0.0]], Ts=1.0)):
+        with pytest.raises(ValueError, match=r"ubar gives the transient input\(s\) u_tau30 a level other than 0"):
+            call([1.0, 0.3])
+    lm = gb.local_model(model, [1.0, 0.0], Ts=1.0)
+    assert lm.ybar == pytest.approx(1.0 / (1 - 0.5)) and gb.local_model(model, 1.0, Ts=1.0).ybar == lm.ybar
+    np.testing.assert_array_equal(gb.narx_steady_state(model, [1.0, 0.0], lm.ybar), [2.0, 1.0, 0.0])
