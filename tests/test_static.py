@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 from hypothesis import assume, given, settings, strategies as st
 
+import graybox as gb
 from graybox import Model, Record, StaticPoints, Structure, evaluate_thetas, jsf, reference
 from graybox.static._analysis import (
     DENOMINATOR_RTOL, _real_roots_companion, cluster_map, rational_static_curve, reached_equilibria, schur_stable,
@@ -497,3 +498,23 @@ def test_an_equilibrium_in_the_float_range_is_found_where_a_coefficient_of_its_e
             assert not eq[0].stable
             # in range the coefficients are as they were: the same model at ū = 1e290
             assert m.equilibria(1e290)[0].ybar == pytest.approx(1e291 / (0.5 - 1e280), rel=1e-9)
+
+
+@pytest.mark.parametrize("second, made", [
+    (([2.0, 4.0], [2.2, 4.0]), {1.0: 1.0, 2.0: 2.1, 3.0: 3.1, 4.0: 4.0}),  # level 2 measured in both sets: averaged
+    (([5.0, 4.0], [5.0, 4.0]), {1.0: 1.0, 2.0: 2.0, 3.0: 3.1, 4.0: 4.0, 5.0: 5.0}),
+])
+def test_the_hint_for_several_sets_of_points_makes_them_when_followed(second, made):
+    """Several sets passed as static= were told to join them with StaticPoints(np.concatenate(...)), which refuses a
+    level measured in two sets (and dropped their δ): the hint names StaticPoints.from_repeats where levels repeat,
+    and carries the uncertainty; followed as written, it makes the points (mend60g)."""
+    sets = [gb.StaticPoints([1.0, 2.0, 3.0], [1.0, 2.0, 3.1], uncertainty=0.1),
+            gb.StaticPoints(*second, uncertainty=0.3)]
+    rec = gb.Record(np.sin(np.arange(30.0)), np.cos(np.arange(30.0)))
+    with pytest.raises(TypeError, match="several sets are one StaticPoints") as err:
+        gb.pe_pareto(["y(k-1)", "u(k-1)"], rec, sets)
+    code = str(err.value).split("all their points: graybox.", 1)[1].split(" (from_repeats", 1)[0]
+    assert ("from_repeats" in code) == (len(made) < 5)
+    points = eval(code, {"np": np, "sets": sets, "StaticPoints": gb.StaticPoints})  # noqa: S307 (the hint's code)
+    assert dict(zip(points.ubar.tolist(), points.ybar.round(12).tolist())) == made
+    assert points.uncertainty is not None

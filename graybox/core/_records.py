@@ -826,9 +826,22 @@ def static_hint(static: object) -> str:
     if is_frame(static):
         return "; make them of its columns: graybox.StaticPoints(df['input column'], df['output column'])"
     if isinstance(static, (tuple, list)) and static and all(isinstance(p, StaticPoints) for p in static):
-        return ("; several sets are one StaticPoints of all their points: graybox.StaticPoints(np.concatenate("
+        # levels measured in more than one set are repeats, which StaticPoints refuses and from_repeats averages; the
+        # sets' δ (one per measurement) go along where every set has them
+        try:
+            ub = np.concatenate([p.ubar for p in static])
+            levels, counts = np.unique(ub, axis=0, return_counts=True)
+            shared = levels[counts > 1].tolist()
+        except ValueError:  # sets of different numbers of inputs: the points' own check says so
+            shared = []
+        make = "StaticPoints.from_repeats" if shared else "StaticPoints"
+        unc = (", uncertainty=np.concatenate([p.uncertainty for p in sets])"
+               if all(p.uncertainty is not None for p in static) else "")
+        why = (f" (from_repeats: the sets measure the level(s) {listed(shared)} more than once, and it averages the "
+               "measurements at each level)" if shared else "")
+        return (f"; several sets are one StaticPoints of all their points: graybox.{make}(np.concatenate("
                 "[p.ubar for p in sets]), np.concatenate([p.ybar for p in sets]), input_names=sets[0].input_names, "
-                "units=sets[0].units)")
+                f"units=sets[0].units{unc}){why}")
     if isinstance(static, (np.ndarray, tuple, list)):
         return "; make them of the levels and the settled outputs: graybox.StaticPoints(ubar, ybar)"
     if callable(static):
