@@ -286,3 +286,11 @@ def test_a_ramp_named_as_an_input_is_an_input_and_static_levels_are_no_time():
     np.testing.assert_array_equal(rec.input("t"), df["t"].to_numpy())
     points = gb.StaticPoints(pd.DataFrame({"a": [1.0, 2.0, 3.0], "b": [5.0, 1.0, 4.0]}), [1.0, 2.0, 3.0])
     assert points.input_names == ("u1", "u2")  # designed levels in even steps: points, not samples in time
+
+
+def test_a_saved_index_beside_an_input_is_refused_without_taking_its_step_for_seconds():
+    import pandas as pd
+    df = pd.DataFrame({"Unnamed: 0": np.arange(20), "u": np.sin(np.arange(20.0))})  # read_csv of a saved index
+    with pytest.raises(ValueError, match=r"column 'Unnamed: 0' .*looks like time or a count of samples.*df\[\['u'\]\], "
+                                         r"with the sampling period \(s\) as Ts="):
+        gb.Record(df, np.cos(np.arange(20.0)))

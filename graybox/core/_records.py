@@ -93,11 +93,14 @@ def _refuse_time_column(x: Any, cols: list, labels: list[str], expected: Sequenc
     if len(found) == 1 and labels[found[0]] not in expected:
         label, step = labels[found[0]], steps[found[0]]
         rest = [l for l in labels if l != label]
+        # a count in steps of 1 (a sample number, a saved index) says nothing of seconds: the period is the user's
+        period = ("with the sampling period (s) as Ts=" if step == 1 and x[cols[found[0]]].dtype.kind in "iu" else
+                  f"with its step as Ts={step:g} if it is seconds")
         raise ValueError(f"{name}: column {label!r} of the DataFrame's columns {labels} looks like time or a count of "
                          f"samples (strictly increasing in even steps of {step:g}), which is no input: pass the input "
-                         f"columns only, e.g. df[{rest!r}], with its step as Ts={step:g} "
-                         f"(graybox.load_record_csv(path, u=..., y=..., time={label!r}) reads a file's time column so); "
-                         f"if it is an input that ramps, name the columns as the inputs, input_names={labels!r}")
+                         f"columns only, e.g. df[{rest!r}], {period} (graybox.load_record_csv(path, u=..., y=..., "
+                         f"time={label!r}) reads a file's time column so); if it is an input that ramps, name the "
+                         f"columns as the inputs, input_names={labels!r}")
 
 
 def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: object = None, *,
