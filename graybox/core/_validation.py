@@ -387,14 +387,22 @@ def refuse_flags(x: object, name: str, what: str = "numbers", *, none: bool = Tr
     bad = isinstance(x, flag) or getattr(dtype, "kind", "") == "b"
     if not bad and (dtype is None or dtype == object):
         # None inside a list (or a pandas Series or DataFrame of objects) too: a float conversion reads it as NaN,
-        # which callers take for a diverged run
-        try:
-            raw = np.asarray(look, dtype=object)
-        except ValueError:  # ragged below the first level: float_array names it
-            raw = np.empty(0, dtype=object)
-        bad = any(isinstance(v, flag) for v in raw.flat)
+        # which callers take for a diverged run. By the items' types, met in C (map): a flat list of 10⁶ floats
+        # is not made an object array first, nor its items tested one by one in Python
+        kinds = set(map(type, look)) if isinstance(look, (list, tuple)) else None
+        if kinds is None or any(issubclass(k, (list, tuple, np.ndarray)) or _is_pandas_type(k) for k in kinds):
+            try:
+                raw = np.asarray(look, dtype=object)
+            except ValueError:  # ragged below the first level: float_array names it
+                raw = np.empty(0, dtype=object)
+            kinds = set(map(type, raw.flat))
+        bad = any(issubclass(k, flag) for k in kinds)
     if bad:
         raise TypeError(f"{name} must be {what}, got {short_value(x)}")
+
+
+def _is_pandas_type(t: type) -> bool:
+    return t.__module__.split(".")[0] == "pandas"
 
 
 #: What samples must be, said where a flag is among them: a logic signal is the caller's to convert, knowingly.
