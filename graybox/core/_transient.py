@@ -94,8 +94,13 @@ def transient_inputs(data: _Data, taus: Sequence[float], *, input_names: Sequenc
     ('u', 'u_tau10', 'u_tau30', 'u_tau100')
     """
     if not isinstance(data, (Record, Dataset, StaticPoints)):
+        several = isinstance(data, (list, tuple)) and data and all(isinstance(d, (Record, Dataset, StaticPoints))
+                                                                   for d in data)
         hint = (": sample it into static points first (e.g. curve.points(ubar, 'u')) and pass those"
-                if hasattr(data, "points") else "")
+                if hasattr(data, "points") else
+                # each record's transient inputs start from rest at its own first sample: one call per record
+                ": it takes one; call it once for each, [graybox.transient_inputs(r, taus=...) for r in records], "
+                "with the same taus" if several else "")
         raise TypeError(f"transient_inputs: data must be a Record, a Dataset or StaticPoints, got "
                         f"{type(data).__name__}{hint}")
     tau_list = [check_real(t, "taus (seconds)", low=0, low_open=True) for t in
