@@ -268,7 +268,11 @@ class Record(Relocked):
         DataFrame whose columns are the ``input_names`` (default ``u`` / ``u1 … um``) is read by
         name, in any column order; one whose columns name none of them, by position; one whose
         columns name some of them is refused (``ValueError`` naming the columns), as is one that
-        holds the output's column (``y`` a Series of that name: ``Record(df, df["p"])``).
+        holds the output's column (``y`` a Series of that name: ``Record(df, df["p"])``) and one with a
+        column that names no input and looks like time or a count of samples (strictly increasing in
+        even steps, where the other columns are not): a record's time is its ``Ts``. A list of equal-length
+        arrays with fewer samples than inputs (``[u1, u2]``: one row per input) is refused too, naming
+        the transpose. Booleans are refused (``TypeError``): convert an on/off signal with ``astype(float)``.
     y : array_like, shape (N,)
         Output samples (engineering units, e.g. mlc).
     Ts : float, optional
