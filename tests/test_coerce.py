@@ -425,7 +425,8 @@ def test_a_series_of_samples_meets_no_list_of_default_names_as_long_as_itself(mo
     the cost of a 10⁶-sample input (mend60g). The samples still come through whole, as the one input."""
     import graybox.core._records as records
     made = []
-    monkeypatch.setattr(records, "default_input_names", lambda m: made.append(m) or gb.core._terms.default_input_names(m))
+    names = records.default_input_names
+    monkeypatch.setattr(records, "default_input_names", lambda m: made.append(m) or names(m))
     u = pd.Series(np.linspace(0.0, 1.0, 5000) ** 2, name="speed")
     rec = gb.Record(u, np.cos(np.arange(5000.0)), Ts=0.1)
     np.testing.assert_array_equal(rec.u, u.to_numpy())
