@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import json
 import sys
 import warnings
 from pathlib import Path
@@ -81,9 +82,38 @@ def eligible(rule: str, B: np.ndarray, w: np.ndarray, ok: np.ndarray) -> np.ndar
 RULES = ("log", "arith", "log+arith", "ratio", "ratio-delta", "best's se", "min")
 
 
-def choose(table: pd.DataFrame, cap: dict, rule: str) -> int:
+def slowest_mode(g: gb.GrayboxSelection, data: gb.Dataset, levels: int = 11) -> np.ndarray:
+    """(rows,) each row's slowest settling time constant in samples, −1 / ln ρ, over ``levels`` operating points of
+    the identification and validation records' inputs (quantiles, each input alike): at each point the most
+    stable equilibrium's spectral radius ρ; inf where ρ ≥ 1 or a point has no equilibrium; NaN: no model."""
+    u = np.concatenate([np.asarray(r.u, float).reshape(len(r), -1) for r in (data.ident, data.valid)])
+    points = np.quantile(u, np.linspace(0.02, 0.98, levels), axis=0)
+    out = []
+    for row, est in zip(g.table.index, g.table["estimator"]):
+        try:
+            m = g.model_of(row, est)
+        except ValueError:
+            out.append(np.nan)
+            continue
+        rho = 0.0
+        for pt in points:
+            try:
+                eq = m.equilibria(pt[0] if pt.size == 1 else pt)
+            except ValueError:
+                eq = []
+            rho = max(rho, min((e.spectral_radius for e in eq), default=np.inf))
+        out.append(np.inf if rho >= 1 else -1 / np.log(rho) if rho > 0 else 0.0)
+    return np.array(out)
+
+
+def choose(table: pd.DataFrame, cap: dict, rule: str, tau_max: float = np.inf) -> int:
+    """The row ``rule`` chooses; rows whose slowest mode is longer than ``tau_max`` samples are left out (unless
+    every in-band row is)."""
     B = np.stack(cap["scores"])
     ok = table["in_band"].to_numpy(bool)
+    if np.isfinite(tau_max):
+        judged = ok & (table["tau"].to_numpy(float) <= tau_max)
+        ok = judged if judged.any() else ok
     e = np.flatnonzero(eligible(rule, B, cap["weights"], ok))
     return int(e[np.lexsort((table["JS_valid"].to_numpy(float)[e], table["n_terms"].to_numpy()[e]))[0]])
 
@@ -119,10 +149,15 @@ def main() -> None:
     ap.add_argument("--first-draw", type=int, default=0,
                     help="0: bench_honest's cases and the draws after them; k > 0: only fresh draws k, k + 1, … of the "
                          "tanks and the synthetic cases (seeds no rule was chosen on: the rule landed on draws < 8)")
+    ap.add_argument("--tau", type=float, default=0.0,
+                    help="leave out rows whose slowest mode (samples, over the records' operating points) is longer "
+                         "than this many validation records (0: keep every row)")
+    ap.add_argument("--dump", default="", help="write each case's captured rows, scores and slowest modes (JSON)")
     args = ap.parse_args()
+    dumped: dict = {}
     names = [c for c in args.cases.split(",") if c]
     print(f"# bench_rule ({datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC, git {git_rev()}, "
-          f"blocks={args.blocks}): {machine()}", flush=True)
+          f"blocks={args.blocks}, tau={args.tau}): {machine()}", flush=True)
     warnings.simplefilter("ignore")
     first = max(args.first_draw, 1)
     cases = bench_honest.cases() if args.first_draw == 0 else {}
@@ -143,10 +178,19 @@ def main() -> None:
             cap["library"] = f"{g.chosen['n_terms']} {g.chosen['estimator']}"
             t = cap["table"].set_index("estimator", append=True)
             t["JS_test"] = g.table.set_index("estimator", append=True)["JS_test"].reindex(t.index).to_numpy()
+            if args.tau or args.dump:
+                t["tau"] = pd.Series(slowest_mode(g, data), index=g.table.set_index("estimator", append=True).index
+                                     ).reindex(t.index).to_numpy()
             sel[box] = (t.reset_index(level="estimator"), cap)
+        if args.dump:
+            dumped[name] = {box: dict(table=t.to_dict(orient="list"), scores=np.stack(c["scores"]).tolist(),
+                                      weights=c["weights"].tolist(), n_valid=len(data.valid))
+                            for box, (t, c) in sel.items()}
+            Path(args.dump).write_text(json.dumps(dumped, allow_nan=True))
         for rule in RULES:
             (gt, gc), (bt, bc) = sel["gray"], sel["black"]
-            i, j = choose(gt, gc, rule), choose(bt, bc, rule)
+            tau_max = args.tau * len(data.valid) if args.tau else np.inf
+            i, j = choose(gt, gc, rule, tau_max), choose(bt, bc, rule, tau_max)
             test_g, test_b = gt["JS_test"].to_numpy(float), bt["JS_test"].to_numpy(float)
             inb = gt["in_band"].to_numpy(bool)
             regret = test_g[i] / test_g[inb & np.isfinite(test_g)].min()
