@@ -2,6 +2,7 @@
 
     .venv/bin/python benchmarks/bench_rule.py [--cases plant,buck,...] [--tank-draws 3]
     .venv/bin/python benchmarks/bench_rule.py --first-draw 8 --tank-draws 8 --synthetic-draws 4   # fresh draws
+    .venv/bin/python benchmarks/bench_rule.py ... --dump seen.json; ... --analyse seen.json --taus 0,1,2
 
 Each case of bench_honest (and more draws of its cascaded tanks) runs ``select_graybox`` once for the gray box
 (the case's band) and once for the black box (no band), fit on identification, choose on the validation record's
@@ -140,6 +141,41 @@ def tank_case(k: int):
     return data, bench_honest._tanks(s + 2, 1500), gb.Candidates(3, 3, degree=3), 25.0
 
 
+def analyse(paths: list[str], taus: list[float], rule: str = "ratio-delta") -> None:
+    """The rule on dumped cases with rows slower than tau validation records left out, for each tau (0: none)."""
+    out = []
+    for path in paths:
+        for name, boxes in json.loads(Path(path).read_text()).items():
+            tables = {b: pd.DataFrame(x["table"]) for b, x in boxes.items()}
+            caps = {b: dict(scores=list(np.array(x["scores"], float)), weights=np.array(x["weights"], float))
+                    for b, x in boxes.items()}
+            n_valid = boxes["gray"]["n_valid"]
+            for tau in taus:
+                tau_max = tau * n_valid if tau else np.inf
+                i, j = (choose(tables[b], caps[b], rule, tau_max) for b in ("gray", "black"))
+                tg, tb = (tables[b]["JS_test"].to_numpy(float) for b in ("gray", "black"))
+                inb = tables["gray"]["in_band"].to_numpy(bool)
+                regret = tg[i] / tg[inb & np.isfinite(tg)].min()
+                out.append(dict(case=name, family=name.split(", draw")[0], tau=tau, regret=regret,
+                                black_regret=tb[j] / tb[np.isfinite(tb)].min(), vs_black=tg[i] / tb[j],
+                                goal=bool(tg[i] / tb[j] <= 1.1 and regret <= 1.2 and inb[i]),
+                                gray=f"{tables['gray']['n_terms'][i]} {tables['gray']['estimator'][i]}",
+                                black=f"{tables['black']['n_terms'][j]} {tables['black']['estimator'][j]}"))
+    df = pd.DataFrame(out)
+    for col in ("regret", "black_regret", "vs_black"):
+        t = np.exp(np.log(df[col]).groupby([df.tau, df.family]).mean()).unstack()
+        t.insert(0, "all cases", np.exp(np.log(df[col]).groupby(df.tau).mean()))
+        print(f"\nGeometric means, {col}, {rule} with rows slower than tau validation records left out:\n"
+              + t.to_markdown(floatfmt=".3f"))
+    print("\ngoal met:", df.groupby("tau")["goal"].sum().to_dict(), "of", df.case.nunique())
+    moved = df.pivot(index="case", columns="tau", values="gray")
+    moved_b = df.pivot(index="case", columns="tau", values="black")
+    print("\ncases whose choice moves with tau (gray | black):")
+    for c in moved.index:
+        if moved.loc[c].nunique() > 1 or moved_b.loc[c].nunique() > 1:
+            print(f"  {c}: " + "; ".join(f"{t}: {moved.loc[c, t]} | {moved_b.loc[c, t]}" for t in moved.columns))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--cases", default="", help="comma-separated case names (default: all)")
@@ -153,7 +189,13 @@ def main() -> None:
                     help="leave out rows whose slowest mode (samples, over the records' operating points) is longer "
                          "than this many validation records (0: keep every row)")
     ap.add_argument("--dump", default="", help="write each case's captured rows, scores and slowest modes (JSON)")
+    ap.add_argument("--analyse", default="", help="comma-separated dumps: apply the library's rule to them at each "
+                    "--taus value and print the regrets (runs no selection)")
+    ap.add_argument("--taus", default="0,0.5,1,2,4", help="with --analyse: the values of --tau to compare")
     args = ap.parse_args()
+    if args.analyse:
+        analyse(args.analyse.split(","), [float(t) for t in args.taus.split(",")])
+        return
     dumped: dict = {}
     names = [c for c in args.cases.split(",") if c]
     print(f"# bench_rule ({datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC, git {git_rev()}, "
