@@ -100,3 +100,12 @@ def test_a_squared_error_that_is_no_number_says_no_unit():
     m = gb.Model(gb.parse_structure(["y(k-1)", "1"]), [0.5, 1.0], units=("rpm", "mlc"))
     text = repr(gb.Decision(m, 0, float("nan"), 1.2, float("nan"), "min J_S", True, 1.2))
     assert "J_S=1.2 mlc²" in text and "J_SF=nan," in text
+
+
+def test_static_points_print_the_range_of_their_uncertainty_not_its_largest_alone():
+    # was: δ = (2, 3) rpm from a file's uncertainty column printed "±3 rpm", as if every point carried ±3 (and the
+    # column had been read as one number); a newcomer checking the load could not see the per-point δ
+    varied = gb.StaticPoints([10.0, 50.0], [632.0, 2980.0], uncertainty=[2.0, 3.0], units=("%", "rpm"))
+    assert _short(varied).endswith("±2–3 rpm)")
+    same = gb.StaticPoints([10.0, 50.0], [632.0, 2980.0], uncertainty=3.0, units=("%", "rpm"))
+    assert _short(same).endswith("±3 rpm)")

@@ -444,7 +444,10 @@ class StaticPoints(Relocked):
         else:
             ins = ", ".join(f"{n} in {range_text(c.min(), c.max())}" for n, c in zip(self.input_names, self.ubar.T))
         uu, yu = _unit_suffixes(self.units)
-        unc = "" if self.uncertainty is None else f", ±{np.max(self.uncertainty):.4g}{yu}"
+        # δ per point from a file's column: its range, so that one number never stands for them all
+        lo, hi = (None, None) if self.uncertainty is None else (np.min(self.uncertainty), np.max(self.uncertainty))
+        unc = ("" if lo is None else f", ±{hi:.4g}{yu}" if f"{lo:.4g}" == f"{hi:.4g}"
+               else f", ±{lo:.4g}–{hi:.4g}{yu}")
         return (f"StaticPoints({self.name!r}: {len(self)} points, {ins}{uu}, ȳ in "
                 f"{range_text(self.ybar.min(), self.ybar.max())}{yu}{unc})")
 
