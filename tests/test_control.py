@@ -687,5 +687,7 @@ def test_operating_points_named_by_input_in_a_dict_are_read_by_name_and_none_is_
         gb.local_model(TWO_INPUTS, {"u1": 1.0, "u3": 0.5}, Ts=0.1)
     with pytest.raises(ValueError, match=r"different numbers of levels \{'u1': 2, 'u2': 1\}"):
         gb.operating_curve(TWO_INPUTS, {"u1": [1.0, 0.6], "u2": 0.5}, Ts=0.1)
+    with pytest.raises(TypeError, match=r"ubar\['u2'\] must be a real number, got True"):
+        gb.local_model(TWO_INPUTS, {"u1": 1.0, "u2": True}, Ts=0.1)
     with pytest.raises(ValueError, match="no input level"):
         gb.operating_curve(reference.paper_model(15), [], Ts=0.05)

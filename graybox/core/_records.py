@@ -51,9 +51,11 @@ def _levels_by_name(x: Mapping[Any, Any], name: str) -> object:
 
     if not all(isinstance(k, str) for k in x):
         raise TypeError(f"{name}: a dict of input levels is keyed by the inputs' names (str), got keys {list(x)!r}")
+    # each level a number, said by its key (a bool, None or text would be refused later as the whole Series)
+    cols = {k: np.array([check_real(e, f"{name}[{k!r}]") for e in np.asarray(v, dtype=object).reshape(-1)])
+            for k, v in x.items()}
     if all(np.ndim(v) == 0 for v in x.values()):
-        return pd.Series(list(x.values()), index=list(x), dtype=object)
-    cols = {k: np.atleast_1d(np.asarray(v, dtype=object)) for k, v in x.items()}
+        return pd.Series([c[0] for c in cols.values()], index=list(cols))
     sizes = {k: len(v) for k, v in cols.items()}
     if len(set(sizes.values())) > 1:
         raise ValueError(f"{name}: the dict gives the inputs different numbers of levels {sizes}: one level each "
