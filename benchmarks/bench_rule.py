@@ -1,6 +1,8 @@
 """The choosing rule of select_graybox against alternatives, on the same scores (issue 26).
 
     .venv/bin/python benchmarks/bench_rule.py [--cases plant,buck,...] [--tank-draws 3]
+    .venv/bin/python benchmarks/bench_rule.py --first-draw 8 --tank-draws 8 --synthetic-draws 4   # fresh draws
+    .venv/bin/python benchmarks/bench_rule.py ... --dump seen.json; ... --analyse seen.json --taus 0,1,2
 
 Each case of bench_honest (and more draws of its cascaded tanks) runs ``select_graybox`` once for the gray box
 (the case's band) and once for the black box (no band), fit on identification, choose on the validation record's
@@ -23,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import json
 import sys
 import warnings
 from pathlib import Path
@@ -80,9 +83,38 @@ def eligible(rule: str, B: np.ndarray, w: np.ndarray, ok: np.ndarray) -> np.ndar
 RULES = ("log", "arith", "log+arith", "ratio", "ratio-delta", "best's se", "min")
 
 
-def choose(table: pd.DataFrame, cap: dict, rule: str) -> int:
+def slowest_mode(g: gb.GrayboxSelection, data: gb.Dataset, levels: int = 11) -> np.ndarray:
+    """(rows,) each row's slowest settling time constant in samples, −1 / ln ρ, over ``levels`` operating points of
+    the identification and validation records' inputs (quantiles, each input alike): at each point the most
+    stable equilibrium's spectral radius ρ; inf where ρ ≥ 1 or a point has no equilibrium; NaN: no model."""
+    u = np.concatenate([np.asarray(r.u, float).reshape(len(r), -1) for r in (data.ident, data.valid)])
+    points = np.quantile(u, np.linspace(0.02, 0.98, levels), axis=0)
+    out = []
+    for row, est in zip(g.table.index, g.table["estimator"]):
+        try:
+            m = g.model_of(row, est)
+        except ValueError:
+            out.append(np.nan)
+            continue
+        rho = 0.0
+        for pt in points:
+            try:
+                eq = m.equilibria(pt[0] if pt.size == 1 else pt)
+            except ValueError:
+                eq = []
+            rho = max(rho, min((e.spectral_radius for e in eq), default=np.inf))
+        out.append(np.inf if rho >= 1 else -1 / np.log(rho) if rho > 0 else 0.0)
+    return np.array(out)
+
+
+def choose(table: pd.DataFrame, cap: dict, rule: str, tau_max: float = np.inf) -> int:
+    """The row ``rule`` chooses; rows whose slowest mode is longer than ``tau_max`` samples are left out (unless
+    every in-band row is)."""
     B = np.stack(cap["scores"])
     ok = table["in_band"].to_numpy(bool)
+    if np.isfinite(tau_max):
+        judged = ok & (table["tau"].to_numpy(float) <= tau_max)
+        ok = judged if judged.any() else ok
     e = np.flatnonzero(eligible(rule, B, cap["weights"], ok))
     return int(e[np.lexsort((table["JS_valid"].to_numpy(float)[e], table["n_terms"].to_numpy()[e]))[0]])
 
@@ -109,22 +141,72 @@ def tank_case(k: int):
     return data, bench_honest._tanks(s + 2, 1500), gb.Candidates(3, 3, degree=3), 25.0
 
 
+def analyse(paths: list[str], taus: list[float], rule: str = "ratio-delta") -> None:
+    """The rule on dumped cases with rows slower than tau validation records left out, for each tau (0: none)."""
+    out = []
+    for path in paths:
+        for name, boxes in json.loads(Path(path).read_text()).items():
+            tables = {b: pd.DataFrame(x["table"]) for b, x in boxes.items()}
+            caps = {b: dict(scores=list(np.array(x["scores"], float)), weights=np.array(x["weights"], float))
+                    for b, x in boxes.items()}
+            n_valid = boxes["gray"]["n_valid"]
+            for tau in taus:
+                tau_max = tau * n_valid if tau else np.inf
+                i, j = (choose(tables[b], caps[b], rule, tau_max) for b in ("gray", "black"))
+                tg, tb = (tables[b]["JS_test"].to_numpy(float) for b in ("gray", "black"))
+                inb = tables["gray"]["in_band"].to_numpy(bool)
+                regret = tg[i] / tg[inb & np.isfinite(tg)].min()
+                out.append(dict(case=name, family=name.split(", draw")[0], tau=tau, regret=regret,
+                                black_regret=tb[j] / tb[np.isfinite(tb)].min(), vs_black=tg[i] / tb[j],
+                                goal=bool(tg[i] / tb[j] <= 1.1 and regret <= 1.2 and inb[i]),
+                                gray=f"{tables['gray']['n_terms'][i]} {tables['gray']['estimator'][i]}",
+                                black=f"{tables['black']['n_terms'][j]} {tables['black']['estimator'][j]}"))
+    df = pd.DataFrame(out)
+    for col in ("regret", "black_regret", "vs_black"):
+        t = np.exp(np.log(df[col]).groupby([df.tau, df.family]).mean()).unstack()
+        t.insert(0, "all cases", np.exp(np.log(df[col]).groupby(df.tau).mean()))
+        print(f"\nGeometric means, {col}, {rule} with rows slower than tau validation records left out:\n"
+              + t.to_markdown(floatfmt=".3f"))
+    print("\ngoal met:", df.groupby("tau")["goal"].sum().to_dict(), "of", df.case.nunique())
+    moved = df.pivot(index="case", columns="tau", values="gray")
+    moved_b = df.pivot(index="case", columns="tau", values="black")
+    print("\ncases whose choice moves with tau (gray | black):")
+    for c in moved.index:
+        if moved.loc[c].nunique() > 1 or moved_b.loc[c].nunique() > 1:
+            print(f"  {c}: " + "; ".join(f"{t}: {moved.loc[c, t]} | {moved_b.loc[c, t]}" for t in moved.columns))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--cases", default="", help="comma-separated case names (default: all)")
     ap.add_argument("--tank-draws", type=int, default=3, help="draws of the cascaded tanks (bench_honest's the first)")
     ap.add_argument("--blocks", type=int, default=None, help="select_graybox's blocks= (default: its own, 5)")
     ap.add_argument("--synthetic-draws", type=int, default=1, help="draws of each synthetic case (likewise)")
+    ap.add_argument("--first-draw", type=int, default=0,
+                    help="0: bench_honest's cases and the draws after them; k > 0: only fresh draws k, k + 1, … of the "
+                         "tanks and the synthetic cases (seeds no rule was chosen on: the rule landed on draws < 8)")
+    ap.add_argument("--tau", type=float, default=0.0,
+                    help="leave out rows whose slowest mode (samples, over the records' operating points) is longer "
+                         "than this many validation records (0: keep every row)")
+    ap.add_argument("--dump", default="", help="write each case's captured rows, scores and slowest modes (JSON)")
+    ap.add_argument("--analyse", default="", help="comma-separated dumps: apply the library's rule to them at each "
+                    "--taus value and print the regrets (runs no selection)")
+    ap.add_argument("--taus", default="0,0.5,1,2,4", help="with --analyse: the values of --tau to compare")
     args = ap.parse_args()
+    if args.analyse:
+        analyse(args.analyse.split(","), [float(t) for t in args.taus.split(",")])
+        return
+    dumped: dict = {}
     names = [c for c in args.cases.split(",") if c]
     print(f"# bench_rule ({datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC, git {git_rev()}, "
-          f"blocks={args.blocks}): {machine()}", flush=True)
+          f"blocks={args.blocks}, tau={args.tau}): {machine()}", flush=True)
     warnings.simplefilter("ignore")
-    cases = bench_honest.cases()
-    for k in range(1, args.tank_draws):
+    first = max(args.first_draw, 1)
+    cases = bench_honest.cases() if args.first_draw == 0 else {}
+    for k in range(first, first + args.tank_draws - (args.first_draw == 0)):
         cases[f"cascaded tanks, draw {k + 1}"] = tank_case(k)
     for name in SYNTHETIC:
-        for k in range(1, args.synthetic_draws):
+        for k in range(first, first + args.synthetic_draws - (args.first_draw == 0)):
             cases[f"{name}, draw {k + 1}"] = synthetic_case(name, k)
     out = []
     for name, (data, test, cand, band) in cases.items():
@@ -138,10 +220,19 @@ def main() -> None:
             cap["library"] = f"{g.chosen['n_terms']} {g.chosen['estimator']}"
             t = cap["table"].set_index("estimator", append=True)
             t["JS_test"] = g.table.set_index("estimator", append=True)["JS_test"].reindex(t.index).to_numpy()
+            if args.tau or args.dump:
+                t["tau"] = pd.Series(slowest_mode(g, data), index=g.table.set_index("estimator", append=True).index
+                                     ).reindex(t.index).to_numpy()
             sel[box] = (t.reset_index(level="estimator"), cap)
+        if args.dump:
+            dumped[name] = {box: dict(table=t.to_dict(orient="list"), scores=np.stack(c["scores"]).tolist(),
+                                      weights=c["weights"].tolist(), n_valid=len(data.valid))
+                            for box, (t, c) in sel.items()}
+            Path(args.dump).write_text(json.dumps(dumped, allow_nan=True))
         for rule in RULES:
             (gt, gc), (bt, bc) = sel["gray"], sel["black"]
-            i, j = choose(gt, gc, rule), choose(bt, bc, rule)
+            tau_max = args.tau * len(data.valid) if args.tau else np.inf
+            i, j = choose(gt, gc, rule, tau_max), choose(bt, bc, rule, tau_max)
             test_g, test_b = gt["JS_test"].to_numpy(float), bt["JS_test"].to_numpy(float)
             inb = gt["in_band"].to_numpy(bool)
             regret = test_g[i] / test_g[inb & np.isfinite(test_g)].min()

@@ -691,3 +691,17 @@ def test_operating_points_named_by_input_in_a_dict_are_read_by_name_and_none_is_
         gb.local_model(TWO_INPUTS, {"u1": 1.0, "u2": True}, Ts=0.1)
     with pytest.raises(ValueError, match="no input level"):
         gb.operating_curve(reference.paper_model(15), [], Ts=0.05)
+
+
+def test_a_transient_inputs_level_other_than_0_is_refused_alike_by_every_steady_state_entry():
+    """local_model took ū = (1, z̄ = 0.3) and gave a local model at ȳ = 3.2, an equilibrium the plant never rests at
+    (a transient input is 0 at every steady state), where narx_steady_state refused the same ū: one check now
+    (mend60g)."""
+    model = gb.Model(gb.Structure(["y(k-1)", "u(k-1)", "u_tau30(k-1)"]), [0.5, 1.0, 2.0])
+    for call in (lambda ub: gb.local_model(model, ub, Ts=1.0), lambda ub: gb.narx_steady_state(model, ub, 2.0),
+                 lambda ub: gb.operating_curve(model, [ub, [2.0, 0.0]], Ts=1.0)):
+        with pytest.raises(ValueError, match=r"ubar gives the transient input\(s\) u_tau30 a level other than 0"):
+            call([1.0, 0.3])
+    lm = gb.local_model(model, [1.0, 0.0], Ts=1.0)
+    assert lm.ybar == pytest.approx(1.0 / (1 - 0.5)) and gb.local_model(model, 1.0, Ts=1.0).ybar == lm.ybar
+    np.testing.assert_array_equal(gb.narx_steady_state(model, [1.0, 0.0], lm.ybar), [2.0, 1.0, 0.0])

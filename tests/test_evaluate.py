@@ -107,7 +107,8 @@ def test_simulate_of_a_list_of_records_says_to_run_each():
     from graybox import Model, Structure, simulate
     model = Model(Structure(["y(k-1)", "u(k-1)"]), np.array([0.5, 1.0]))
     recs = _two_records()
-    with pytest.raises(TypeError, match=r"once per record.*for r in records"):
+    # called as graybox.simulate(structure, theta, …), where the caller may hold no model: told that call too
+    with pytest.raises(TypeError, match=r"once per record.*for r in records.*simulate\(structure, theta, r\)"):
         simulate(model.structure, model.theta, recs)
     with pytest.raises(TypeError, match=r"once per record.*for r in records"):
         model.simulate(tuple(recs))

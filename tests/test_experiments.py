@@ -963,3 +963,26 @@ def test_worker_timeout_without_dask_names_the_options_that_take_it(tmp_path, ca
         err = capsys.readouterr().err
         assert "--worker-timeout" in err and "--workers N or --scheduler ADDRESS" in err and "inprocess" not in err
     assert not (tmp_path / "s.sqlite").exists()
+
+
+def test_the_scatter_says_why_cells_with_j_0_are_not_on_its_log_axis(small_store):
+    """A cell with J_SF = 0 (an exact fit) was left off the scatter and counted ("k of n cells drawn") without a word
+    why: a log axis has no 0. The title now says so; on a linear axis the cell is drawn (mend60g)."""
+    path, _ = small_store
+    df = gx.load_results(path)
+    d = df["data"].iloc[0]
+    df = df[df["data"] == d]
+    finite = np.isfinite(df["JS_valid"].to_numpy(float)) & np.isfinite(df["JSF"].to_numpy(float))
+    rows = df.index[finite]
+    spread = df.copy()
+    spread.loc[rows[0], "JSF"] = 0.0
+    spread.loc[rows[1], "JSF"] = 100 * float(spread.loc[rows[1:], "JSF"].max()) + 1.0  # a log axis for J_SF
+    ax = gx.plot_scatter(spread).axes[0]
+    assert ax.get_yscale() == "log"
+    assert ax.get_title().endswith(f"{finite.sum() - 1} of {len(df)} cells drawn (1 with J_SF = 0, which a log axis "
+                                   "cannot show)")
+    near = df.copy()
+    near.loc[rows, "JSF"] = 1.0 + np.arange(len(rows)) / len(rows)
+    near.loc[rows[0], "JSF"] = 0.0
+    ax = gx.plot_scatter(near).axes[0]
+    assert ax.get_yscale() == "linear" and ax.get_title().endswith(f"{finite.sum()} of {len(df)} cells drawn")

@@ -417,3 +417,47 @@ def test_an_output_near_the_float_ranges_ends_is_fitted_as_in_ordinary_units(ey)
             assert got == pytest.approx(np.ldexp(want, 2 * ey), rel=1e-6, abs=1e-320)
     assert res.start == ref.start and res.radius == pytest.approx(ref.radius, rel=1e-9)
     assert list(res.starts["status"]) == list(ref.starts["status"])
+
+
+def test_problems_of_other_lengths_or_shapes_over_the_same_numbers_have_other_fingerprints():
+    """The arrays' bytes were hashed one after another, without their shapes: one record of 6 samples and two of 3
+    over the same numbers, or a record and static points, shared a fingerprint, and a checkpoint of one problem was
+    resumed for the other (mend60g)."""
+    st = gb.Structure(["y(k-1)", "u(k-1)"])
+    x = np.arange(1.0, 13.0)
+    one = SEProblem(st, gb.Record(x[:6], x[6:]), None, scored_only=True)
+    two = SEProblem(st, [gb.Record(x[:3], x[3:6]), gb.Record(x[6:9], x[9:])], None, scored_only=True)
+    assert one.fingerprint() != two.fingerprint()
+    wide = SEProblem(["y(k-1)", "u1(k-1)"], gb.Record(x[:8].reshape(4, 2), x[8:]), None, scored_only=True)
+    split = SEProblem(["y(k-1)", "u1(k-1)"], [gb.Record(x[:4].reshape(2, 2), x[4:6]),
+                                               gb.Record(x[6:10].reshape(2, 2), x[10:])], None, scored_only=True)
+    assert wide.fingerprint() != split.fingerprint()
+    points = SEProblem(st, gb.Record(x[:3], x[3:6]), gb.StaticPoints(x[6:9], x[9:]), scored_only=True)
+    assert points.fingerprint() != two.fingerprint()  # static points are no second record
+
+
+def test_a_checkpoint_fingerprinted_without_shapes_starts_over_as_one_of_another_version(oe_data, tmp_path):
+    """A checkpoint written before the fingerprint held the arrays' shapes is this problem's (as far as that hash
+    could tell): started over with the warning of another version's file, not refused as another problem's."""
+    import json
+
+    from graybox.estimation._simulation_error import _save_checkpoint, read_npz
+    fit = gb.Record(oe_data[0].u[:60], oe_data[0].y[:60])  # short: the sweep is run twice
+    static = gb.StaticPoints(np.array([-0.5, 0.5]), np.array([0.0, 0.5]))
+    kw = dict(lambdas=[1.0], method="gradient", checkpoint=tmp_path / "old.npz", margin=None)
+    ck = kw["checkpoint"]
+    first = se_pareto(OE_STRUCT, fit, static, **kw)
+    arrays = read_npz(ck)
+    meta = json.loads(str(arrays["meta"]))
+    assert meta["problem"] == SEProblem(OE_STRUCT, fit, static).fingerprint()
+    meta["problem"] = SEProblem(OE_STRUCT, fit, static).fingerprint(shapes=False)
+    _save_checkpoint(ck, meta, arrays["thetas"], arrays["costs"], int(arrays["done"]),
+                     json.loads(str(arrays["failures"])), arrays["nfev"])
+    with pytest.warns(UserWarning, match="left out its arrays' shapes.*starts over"):
+        again = se_pareto(OE_STRUCT, fit, static, **kw)
+    np.testing.assert_allclose(again.thetas, first.thetas)
+    meta["problem"] = "0123456789abcdef"  # any other problem's is refused, as before
+    _save_checkpoint(ck, meta, arrays["thetas"], arrays["costs"], int(arrays["done"]),
+                     json.loads(str(arrays["failures"])), arrays["nfev"])
+    with pytest.raises(ValueError, match="another problem"):
+        se_pareto(OE_STRUCT, fit, static, **kw)

@@ -4,6 +4,7 @@ of numbers (a ragged nesting keeps real_array's TypeError, in float_array's word
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
 
 import graybox as gb
@@ -42,3 +43,28 @@ def test_a_public_path_gives_the_same_errors():
         curve([[1.0, 2.0], [3.0]])
     with pytest.raises(TypeError, match="ubar must be"):
         curve([1.0, None])
+
+
+_FLAGS = np.array([True, False, True, True, False, True])
+_NUMS = _FLAGS.astype(float)
+
+
+@pytest.mark.parametrize("call, name", [
+    (lambda: gb.fit_percent([True, False, True], [1.0, 0.0, 1.0]), "y"),  # was 100 (%): True read as 1
+    (lambda: gb.mse(_FLAGS, _NUMS), "y"),
+    (lambda: gb.Record(_NUMS, _FLAGS), "record: y"),
+    (lambda: gb.Record(_FLAGS, _NUMS), "record: u"),
+    (lambda: gb.Record([True, 1.5, 2.0, 3.0, 1.0, 0.0], _NUMS), "record: u"),  # one flag among numbers
+    (lambda: gb.Record(pd.Series(_FLAGS, name="u"), _NUMS), "record: u"),
+    (lambda: gb.Record(pd.DataFrame({"u1": _FLAGS, "u2": _NUMS[::-1]}), np.arange(6.0)), "record: u"),
+    (lambda: gb.StaticPoints([1.0, 2.0, 3.0], [True, False, True]), "static points: ybar"),
+    (lambda: gb.StaticPoints([True, False], [1.0, 2.0]), "static points: ubar"),
+    (lambda: gb.regressor_matrix(gb.Structure(["y(k-1)", "u(k-1)"]), _FLAGS, _NUMS), "u"),
+    (lambda: gb.regressor_matrix(gb.Structure(["y(k-1)", "u(k-1)"]), _NUMS, _FLAGS), "y"),
+    (lambda: gb.Model(gb.Structure(["y(k-1)", "u(k-1)"]), [0.5, 1.0]).simulate(_FLAGS, y0=[0.0]), "u"),
+])
+def test_booleans_are_no_samples_a_type_error_naming_the_argument(call, name):
+    """True and False were read as 1 and 0 (fit_percent([True, False, True], [1, 0, 1]) was 100 %): a flag where
+    samples are meant is a wrong type, as it is in θ (mend60g)."""
+    with pytest.raises(TypeError, match=f"^{name} must be numbers.*astype\\(float\\)"):
+        call()

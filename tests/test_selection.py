@@ -403,6 +403,24 @@ def test_semp_short_of_its_size_on_offset_signals_names_the_offsets():
         semp(Candidates(2, 2, degree=2), rec, n_terms=6)
 
 
+def test_frols_fewer_terms_that_centring_does_not_mend_does_not_blame_offsets():
+    # a two-level input far from zero: u(k-1)² is affine in u(k-1) whatever the offset, so centre=True runs out at
+    # the same 3 terms; the note said the offsets were the cause and pointed to centre=True all the same
+    rng = np.random.default_rng(0)
+    u = np.where(rng.random(300) < 0.5, -1.0, 1.0)
+    y = np.zeros(300)
+    for k in range(1, 300):
+        y[k] = 0.5 * y[k - 1] + u[k - 1] + 0.01 * rng.standard_normal()
+    cands = Structure(["1", "u(k-1)", "u(k-1)^2", "y(k-1)"])
+    rec = Record(u + 1e4, y - 1e5)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", CandidateWarning)
+        for centre in (True, False):
+            with pytest.raises(FewerTermsError) as err:
+                frols(cands, rec, n_terms=4, centre=centre)
+            assert err.value.reached == 3 and "far from zero" not in str(err.value), str(err.value)
+
+
 def test_frols_fewer_terms_with_a_held_input_does_not_blame_offsets():
     # an input held at 5 has no spread: centred it is zero, so centre=True is no way out and the note would mislead
     u, y = _offset_narx()

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 from hypothesis import assume, given, settings, strategies as st
 
+import graybox as gb
 from graybox import Model, Record, StaticPoints, Structure, evaluate_thetas, jsf, reference
 from graybox.static._analysis import (
     DENOMINATOR_RTOL, _real_roots_companion, cluster_map, rational_static_curve, reached_equilibria, schur_stable,
@@ -453,3 +454,67 @@ def test_an_equilibrium_beyond_the_float_range_is_not_said_to_be_no_root_at_all(
     assert m.equilibria(1e308) == [] and m.equilibria(1e307)[0].ybar == pytest.approx(2e307)
     with pytest.raises(ValueError, match="no real root within the float range"):
         m.static_curve([1e308])
+
+
+def test_an_equilibrium_in_the_float_range_is_found_where_the_input_power_alone_leaves_it():
+    # the static equation's coefficient σ ū^m was taken as σ · (ū^m): y = 0.5 y + 1e-300 u² at ū = 1e200 (ū² = 1e400,
+    # no float) was refused as having 'no real root within the float range', where its root is 2e100, and at the
+    # other end y = 0.5 y + 1e300 u² at ū = 1e-200 (ū² = 0 in floats) gave ȳ = 0, silently, for 2e-100. The same
+    # model in other units (u' = u / 1e200, θ' = θ · 1e400) found both: a result that depended on the units
+    import warnings
+
+    import graybox as gb
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for th, ub, yb in ((1e-300, 1e200, 2e100), (1e300, 1e-200, 2e-100)):
+            for extra, ex_th in (([], []), (["y(k-1)^2"], [-1e-300 if ub < 1 else -1e-200])):
+                m = gb.Model(["y(k-1)", "u(k-1)^2"] + extra, [0.5, th] + ex_th)
+                near = [e for e in m.equilibria(ub) if e.stable]
+                assert len(near) == 1 and near[0].ybar == pytest.approx(yb, rel=1e-9), (extra, ub, near)
+                assert m.static_curve([ub])[0] == pytest.approx(yb, rel=1e-9)
+        # two inputs (the surface folds θ_t ū^a): y = 0.5 y + 1e-300 u1² + u2 at (1e200, 1) and (1e-200, 1)
+        m = gb.Model(["y(k-1)", "u1(k-1)^2", "u2(k-1)"], [0.5, 1e-300, 1.0])
+        assert m.static_curve([[1e200, 1.0]])[0] == pytest.approx(2e100, rel=1e-9)
+        m = gb.Model(["y(k-1)", "u1(k-1)^2", "u2(k-1)"], [0.5, 1e300, 1e-100])
+        assert m.static_curve([[1e-200, 1.0]])[0] == pytest.approx(2e-100 + 2e-100, rel=1e-9)
+
+
+def test_an_equilibrium_in_the_float_range_is_found_where_a_coefficient_of_its_equation_leaves_it():
+    # y = 0.5 y + 1e-10 y u + 10 u at ū = 1e308: the numerator 10 ū = 1e309 of eq. (6) is no float, its denominator
+    # 1 − 0.5 − 1e-10 ū = −1e298 is, and the equilibrium −1e11 lies well inside the float range; it was refused as
+    # 'no real root within the float range'. Read over a power of two common to the level's coefficients it is found
+    # (unstable: a_1 = 0.5 + 1e298); with a small y² term, the polynomial path alike
+    import warnings
+
+    import graybox as gb
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for extra, th in (([], []), (["y(k-1)^2"], [-1e-300])):
+            m = gb.Model(["y(k-1)", "y(k-1)u(k-1)", "u(k-1)"] + extra, [0.5, 1e-10, 10.0] + th)
+            eq = [e for e in m.equilibria(1e308) if abs(e.ybar) < 1e300]
+            assert len(eq) == 1 and eq[0].ybar == pytest.approx(-1e11, rel=1e-9)  # 10 ū / (1 − 0.5 − 1e-10 ū)
+            assert not eq[0].stable
+            # in range the coefficients are as they were: the same model at ū = 1e290
+            assert m.equilibria(1e290)[0].ybar == pytest.approx(1e291 / (0.5 - 1e280), rel=1e-9)
+
+
+@pytest.mark.parametrize("second, made", [
+    (([2.0, 4.0], [2.2, 4.0]), {1.0: 1.0, 2.0: 2.1, 3.0: 3.1, 4.0: 4.0}),  # level 2 measured in both sets: averaged
+    (([5.0, 4.0], [5.0, 4.0]), {1.0: 1.0, 2.0: 2.0, 3.0: 3.1, 4.0: 4.0, 5.0: 5.0}),
+])
+def test_the_hint_for_several_sets_of_points_makes_them_when_followed(second, made):
+    """Several sets passed as static= were told to join them with StaticPoints(np.concatenate(...)), which refuses a
+    level measured in two sets (and dropped their δ): the hint names StaticPoints.from_repeats where levels repeat,
+    and carries the uncertainty; followed as written, it makes the points (mend60g)."""
+    sets = [gb.StaticPoints([1.0, 2.0, 3.0], [1.0, 2.0, 3.1], uncertainty=0.1),
+            gb.StaticPoints(*second, uncertainty=0.3)]
+    rec = gb.Record(np.sin(np.arange(30.0)), np.cos(np.arange(30.0)))
+    with pytest.raises(TypeError, match="several sets are one StaticPoints") as err:
+        gb.pe_pareto(["y(k-1)", "u(k-1)"], rec, sets)
+    code = str(err.value).split("all their points: graybox.", 1)[1].split(" (from_repeats", 1)[0]
+    assert ("from_repeats" in code) == (len(made) < 5)
+    points = eval(code, {"np": np, "sets": sets, "StaticPoints": gb.StaticPoints})  # noqa: S307 (the hint's code)
+    assert dict(zip(points.ubar.tolist(), points.ybar.round(12).tolist())) == made
+    assert points.uncertainty is not None

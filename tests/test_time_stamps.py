@@ -256,3 +256,41 @@ def test_a_quoted_file_with_a_byte_order_mark_keeps_numpys_reader(tmp_path, monk
         f.write_bytes(("\ufeff" + nl.join(['"t","n","u","y"'] + rows) + nl).encode())
         rec = gb.load_record_csv(f, u="u", y="y", time="t")
         assert fast[-1] is not None and rec.Ts == 1.0 and rec.y.tolist() == [0.25 * k for k in range(6)]
+
+
+def _frame_with_time():
+    import pandas as pd
+    t = 100.0 + 0.1 * np.arange(40)  # seconds of a logger's clock
+    u = np.sin(np.arange(40.0)) + 0.1 * np.arange(40) % 3
+    return pd.DataFrame({"t": t, "u": u, "y": 0.5 * u + 1.0})
+
+
+@pytest.mark.parametrize("make", [
+    lambda df: gb.Record(df[["t", "u"]], df["y"]),
+    lambda df: gb.Record(df.drop(columns="y"), df["y"].to_numpy()),
+    lambda df: gb.Record(df[["t", "u"]], df["y"], input_names=("u", "v")),
+    lambda df: gb.simulate(gb.Structure(["y(k-1)", "u(k-1)"]), [0.5, 1.0], df[["t", "u"]], y0=[0.0]),
+])
+def test_a_frames_time_column_is_refused_at_once_naming_it_and_its_step(make):
+    """A float time column beside one input was read as a second input (u1 = t, u2 = u), and the record failed only
+    at the fit, on the inputs' default names (mend60g): now refused where it is read, naming the column, its step
+    as Ts= and the loader's time= option."""
+    with pytest.raises(ValueError, match=r"column 't' .*looks like time.*Ts=0\.1\b.*time='t'"):
+        make(_frame_with_time())
+
+
+def test_a_ramp_named_as_an_input_is_an_input_and_static_levels_are_no_time():
+    import pandas as pd
+    df = _frame_with_time()
+    rec = gb.Record(df[["t", "u"]], df["y"], input_names=("t", "u"))  # named so: the user's own ramp input
+    np.testing.assert_array_equal(rec.input("t"), df["t"].to_numpy())
+    points = gb.StaticPoints(pd.DataFrame({"a": [1.0, 2.0, 3.0], "b": [5.0, 1.0, 4.0]}), [1.0, 2.0, 3.0])
+    assert points.input_names == ("u1", "u2")  # designed levels in even steps: points, not samples in time
+
+
+def test_a_saved_index_beside_an_input_is_refused_without_taking_its_step_for_seconds():
+    import pandas as pd
+    df = pd.DataFrame({"Unnamed: 0": np.arange(20), "u": np.sin(np.arange(20.0))})  # read_csv of a saved index
+    with pytest.raises(ValueError, match=r"column 'Unnamed: 0' .*looks like time or a count of samples.*df\[\['u'\]\], "
+                                         r"with the sampling period \(s\) as Ts="):
+        gb.Record(df, np.cos(np.arange(20.0)))

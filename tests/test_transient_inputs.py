@@ -262,3 +262,13 @@ def test_static_points_lacking_a_transient_input_are_told_how_to_add_it():
     # as told: the static curve at z̄ = 0 is ȳ = ū / (1 − 0.5) = 2 ū, so J_SF = mean((ȳ − 2 ū)²)
     want = np.mean((np.array([1.1, 2.0, 2.9]) - 2.0 * np.array([0.5, 1.0, 1.5])) ** 2)
     assert gb.jsf(model, gb.transient_inputs(points, (3,))) == pytest.approx(want)
+
+
+def test_several_records_are_told_to_be_given_one_at_a_time():
+    """A list of records (several experiments) was refused as 'got list', naming no way on (mend60g)."""
+    rec = gb.Record(np.arange(10.0) % 3, np.arange(10.0))
+    with pytest.raises(TypeError, match=r"got list: it takes one; call it once for each, "
+                                        r"\[graybox\.transient_inputs\(r, taus=\.\.\.\) for r in records\]"):
+        gb.transient_inputs([rec, rec], taus=[2.0])
+    each = [gb.transient_inputs(r, taus=[2.0]) for r in (rec, rec)]
+    assert all(r.input_names == ("u", "u_tau2") for r in each)

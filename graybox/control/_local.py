@@ -33,7 +33,7 @@ from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, 
                               check_same_units, check_units, frame_inputs, labelled_point, outside_range,
                               rounded_levels, static_point_inputs)
 from ..core._terms import Structure, check_input_names, require_inputs
-from ..core._transient import steady_levels
+from ..core._transient import refuse_transient_levels, steady_levels
 from ..core._reprs import exact_text, listed
 from ..core._validation import (Relocked, check_count, check_band_finite, check_band_values, check_choice, check_fields,
                                 check_int, check_per_point, check_real, check_seed, frozen, real_array, warn)
@@ -579,6 +579,7 @@ def _as_points(model: Model, ubar: object, one_point: bool = False) -> np.ndarra
                          f"{model.input_names}, got shape {np.shape(ubar)}")
     if not np.all(np.isfinite(ub)):
         raise ValueError("ubar has non-finite values")
+    refuse_transient_levels(ub, model.input_names)  # no equilibrium there: narx_steady_state refuses it alike
     return ub
 
 

@@ -35,7 +35,7 @@ import numpy as np
 from ..core._records import Record, check_period, frame_inputs, require_record
 from ..core._simulation import DivergenceError
 from ..core._terms import Structure, require_inputs, transient_source
-from ..core._transient import _tau_of, steady_levels
+from ..core._transient import _tau_of, refuse_transient_levels, steady_levels
 from ..core._validation import check_bool, check_int, check_real, check_str
 from ..models._model import Model
 from ._local import check_Ts, check_polynomial, input_levels, require_control, system_name
@@ -238,11 +238,7 @@ def narx_steady_state(model: Model, ubar: float | np.ndarray, ybar: float, *, no
         raise ValueError(f"ubar must be {model.n_inputs} finite value(s) {model.input_names}, got {ubar!r}")
     yb = check_real(ybar, "ybar")
     lay = _layout(model.structure, model.input_names)
-    moving = [model.input_names[j] for j, _, _ in lay.transient if ub[j] != 0.0]
-    if moving:  # the system computes them from their inputs' changes: at any other level they decay, nothing settles
-        raise ValueError(f"ubar gives the transient input(s) {', '.join(moving)} a level other than 0, but a transient "
-                         "input is 0 at every steady state (narx_iosystem computes it from its input's changes): leave "
-                         "it out or give 0")
+    refuse_transient_levels(ub, model.input_names)  # narx_iosystem computes them: at any other level they decay
     ne = _noise_coefficients(model).size if noise else 0
     return np.concatenate([np.full(lay.Ly, yb)] + [np.full(L, u) for u, L in zip(ub, lay.Lu)] + [np.zeros(ne)])
 

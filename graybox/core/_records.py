@@ -19,8 +19,8 @@ import numpy as np
 
 from ._reprs import listed, range_text
 from ._terms import check_input_names, default_input_names, missing_input_hint, transient_source
-from ._validation import (Relocked, as_1d_finite, locked, check_int, check_ordered, check_per_point, check_real,
-                          check_str, float_array, frozen_value, refuse_non_real, warn)
+from ._validation import (SAMPLES, Relocked, as_1d_finite, locked, check_int, check_ordered, check_per_point,
+                          check_real, check_str, float_array, frozen_value, refuse_flags, refuse_non_real, warn)
 
 __all__ = ["Record", "StaticPoints", "StaticRangeWarning", "warn_static_range"]
 
@@ -39,8 +39,10 @@ def labelled_point(x: object, names: Sequence[str]) -> bool:
     """Whether ``x`` is a pandas Series whose index labels are the inputs ``names`` (a DataFrame's row), or a dict
     of one number per input by name: one point ū by what it says, never levels of one input, whatever its values."""
     if isinstance(x, Mapping):
-        return sorted(str(c) for c in x) == sorted(names) and all(np.ndim(v) == 0 for v in x.values())
-    return _is_series(x) and sorted(str(c) for c in x.index) == sorted(names)  # type: ignore[attr-defined]
+        return (len(x) == len(names) and sorted(str(c) for c in x) == sorted(names)
+                and all(np.ndim(v) == 0 for v in x.values()))
+    return (_is_series(x) and len(x) == len(names)  # type: ignore[arg-type]
+            and sorted(str(c) for c in x.index) == sorted(names))  # type: ignore[attr-defined]
 
 
 def _levels_by_name(x: Mapping[Any, Any], name: str) -> object:
@@ -86,8 +88,46 @@ def _varies(y: object) -> bool:
     return a.size > 1 and bool(np.any(a != a.flat[0]))
 
 
+def _time_step(x: object) -> float | None:
+    """The step of a column that looks like time or a count of samples (at least 3 values, strictly increasing, in
+    steps equal to 1e-6 of theirs: a clock's seconds written out keep that), else None. Numbers only: dates and text
+    are refused as such where they are read (:func:`~graybox.core._validation.refuse_non_real`)."""
+    if getattr(getattr(x, "dtype", None), "kind", "") not in "iuf":
+        return None
+    try:
+        a = np.asarray(x, dtype=float)
+    except (TypeError, ValueError):
+        return None
+    if a.ndim != 1 or a.size < 3 or not np.all(np.isfinite(a)):
+        return None
+    d = np.diff(a)
+    step = float(np.mean(d))
+    return step if d.min() > 0 and d.max() - d.min() <= 1e-6 * step else None
+
+
+def _refuse_time_column(x: Any, cols: list, labels: list[str], expected: Sequence[str], name: str) -> None:
+    """``ValueError`` naming the one column of the DataFrame of samples ``x`` that names no input and looks like time
+    (:func:`_time_step`) where the others do not: read by position it was an input, and the record failed later, on
+    the inputs' names. Two or more such columns are ramps (a synthetic test's inputs), none of them told from time."""
+    if not all(getattr(k, "kind", "") in "iuf" for k in x.dtypes):
+        return  # a column of dates or text is refused as such (refuse_non_real), beside whatever ramps
+    steps = [_time_step(x[c]) for c in cols]
+    found = [i for i, step in enumerate(steps) if step is not None]
+    if len(found) == 1 and labels[found[0]] not in expected:
+        label, step = labels[found[0]], steps[found[0]]
+        rest = [l for l in labels if l != label]
+        # a count in steps of 1 (a sample number, a saved index) says nothing of seconds: the period is the user's
+        period = ("with the sampling period (s) as Ts=" if step == 1 and x[cols[found[0]]].dtype.kind in "iu" else
+                  f"with its step as Ts={step:g} if it is seconds")
+        raise ValueError(f"{name}: column {label!r} of the DataFrame's columns {labels} looks like time or a count of "
+                         f"samples (strictly increasing in even steps of {step:g}), which is no input: pass the input "
+                         f"columns only, e.g. df[{rest!r}], {period} (graybox.load_record_csv(path, u=..., y=..., "
+                         f"time={label!r}) reads a file's time column so); if it is an input that ramps, name the "
+                         f"columns as the inputs, input_names={labels!r}")
+
+
 def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: object = None, *,
-                 steady: bool = False) -> object:
+                 steady: bool = False, samples: bool = False) -> object:
     """A DataFrame of inputs with its columns in the order of ``names`` (the one rule for every input).
 
     Columns named exactly as the inputs (every name once, no other column) are read by name, reordered as
@@ -103,7 +143,9 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
     points pass a named Series or None: a few ȳ may equal an input's levels by the plant's own law (a unit gain).
     ``steady``: ``x`` is steady-state levels, where the transient inputs among ``names`` rest at 0 and may be left
     out (:func:`~graybox.core._transient.steady_levels` fills them in): columns naming every other input are read
-    by name too, in their order.
+    by name too, in their order. ``samples``: ``x`` is samples in time (a record's, a free run's), where the one
+    column that looks like time or a count of samples (strictly increasing in even steps; the others not) is refused
+    unless it names an input, naming it: read by position it would be an input.
     """
     by_name = steady and isinstance(x, Mapping)
     if by_name:
@@ -115,6 +157,13 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
     label = None if named is None else named.name  # type: ignore[attr-defined]
     if series and label is not None and getattr(x, "name", None) == label and _same_samples(x, output):
         raise ValueError(f"{name}: {label!r} is both the input and the output; pass the input column as u")
+    if series and getattr(getattr(x.index, "dtype", None), "kind", "O") in "iufcmMb":
+        # labels of numbers or times (a RangeIndex of 10⁶ samples): none is an input's name, an identifier, so none
+        # is read one by one (as a DataFrame's columns are not), nor are N default names built to meet them
+        said = getattr(x, "name", None)
+        if isinstance(said, str) and (said in names if names is not None else _default_name(said, len(x))):
+            return frame_inputs(x.to_frame(), names, name, output, steady=steady)  # a column, read as below
+        return x
     cols = list(x.index if series else x.columns)
     labels = [str(c) for c in cols]
     what = "dict's keys" if by_name else "Series' index labels" if series else "DataFrame's columns"
@@ -137,6 +186,8 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
                              f"input may be: pass the input columns only, e.g. df[{rest!r}] (a time column is no "
                              "input: give its step as Ts=)")
     expected = tuple(default_input_names(len(cols)) if names is None else names)
+    if samples and not series and len(cols) > 1:
+        _refuse_time_column(x, cols, labels, expected, name)
     known = frozenset(expected)  # a Series of N samples meets N default names (u1 … uN): `in` a tuple made it N²
     hits = [c for c in labels if c in known]
     if series and not hits and isinstance(getattr(x, "name", None), str) and x.name in expected:
@@ -173,6 +224,15 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
                      f"{repeated or 'none'}): read by position they would land on other inputs. {fix}")
 
 
+def _default_name(label: str, m: int) -> bool:
+    """Whether ``label`` is one of the default names of ``m`` inputs (``label in default_input_names(m)``, told
+    without making the m names)."""
+    if m == 1:
+        return label == "u"
+    k = label[1:]
+    return label[:1] == "u" and k.isascii() and k.isdigit() and k[0] != "0" and 1 <= int(k) <= m
+
+
 def as_input_array(x: object, name: str, names: Sequence[str] | None = None, *, output: object = None,
                    row: str = "sample") -> np.ndarray:
     """Input samples as a read-only float64 copy: shape (N,) for one input, C-contiguous (N, m) for several.
@@ -183,8 +243,9 @@ def as_input_array(x: object, name: str, names: Sequence[str] | None = None, *, 
     (:func:`frame_inputs`; ``output``, the output as a named Series, never an input). A non-finite value is
     said by its ``row`` (``"sample"``, ``"point"``; counted from 0) and its input's name.
     """
-    x = frame_inputs(x, names, name, output)
+    x = frame_inputs(x, names, name, output, samples=row == "sample")
     refuse_non_real(x, name)
+    refuse_flags(x, name, SAMPLES, none=False)  # an on/off input's True read as 1 is the caller's to say
     a = float_array(x, name)
     if a.ndim == 2 and a.shape[1] == 1:
         a = a[:, 0].copy()
@@ -193,6 +254,14 @@ def as_input_array(x: object, name: str, names: Sequence[str] | None = None, *, 
     if a.ndim != 2:
         raise ValueError(f"{name} must be 1-D (one input) or 2-D of shape (N, m) (m inputs), got {a.ndim}-D "
                          f"with shape {a.shape}")
+    if row == "sample" and 0 < a.shape[0] < a.shape[1] and not is_frame(x):
+        # [u1, u2] (or np.array of it): numpy's rows are samples, so 2 samples of N inputs; the one rule of every
+        # entry that takes samples (a free run said N inputs u1 … uN, the regressors 2 samples against N outputs)
+        k, n = a.shape
+        raise ValueError(f"{name} has shape {a.shape}, one row per input: give one column per input, shape ({n}, {k}) "
+                         f"(the transpose, x.T, or np.column_stack of the inputs). Or {k} separate run(s) of one "
+                         f"input: pass them one at a time (a Record each). (As numpy reads it, {k} sample(s) of {n} "
+                         "inputs: fewer samples than inputs)")
     if a.shape[1] == 0:
         raise ValueError(f"{name} has no input column (shape {a.shape}); for output-only data (a structure "
                          "without input terms) pass a column of zeros")
@@ -230,7 +299,11 @@ class Record(Relocked):
         DataFrame whose columns are the ``input_names`` (default ``u`` / ``u1 … um``) is read by
         name, in any column order; one whose columns name none of them, by position; one whose
         columns name some of them is refused (``ValueError`` naming the columns), as is one that
-        holds the output's column (``y`` a Series of that name: ``Record(df, df["p"])``).
+        holds the output's column (``y`` a Series of that name: ``Record(df, df["p"])``) and one with a
+        column that names no input and looks like time or a count of samples (strictly increasing in
+        even steps, where the other columns are not): a record's time is its ``Ts``. A list of equal-length
+        arrays with fewer samples than inputs (``[u1, u2]``: one row per input) is refused too, naming
+        the transpose. Booleans are refused (``TypeError``): convert an on/off signal with ``astype(float)``.
     y : array_like, shape (N,)
         Output samples (engineering units, e.g. mlc).
     Ts : float, optional
@@ -794,9 +867,22 @@ def static_hint(static: object) -> str:
     if is_frame(static):
         return "; make them of its columns: graybox.StaticPoints(df['input column'], df['output column'])"
     if isinstance(static, (tuple, list)) and static and all(isinstance(p, StaticPoints) for p in static):
-        return ("; several sets are one StaticPoints of all their points: graybox.StaticPoints(np.concatenate("
+        # levels measured in more than one set are repeats, which StaticPoints refuses and from_repeats averages; the
+        # sets' δ (one per measurement) go along where every set has them
+        try:
+            ub = np.concatenate([p.ubar for p in static])
+            levels, counts = np.unique(ub, axis=0, return_counts=True)
+            shared = levels[counts > 1].tolist()
+        except ValueError:  # sets of different numbers of inputs: the points' own check says so
+            shared = []
+        make = "StaticPoints.from_repeats" if shared else "StaticPoints"
+        unc = (", uncertainty=np.concatenate([p.uncertainty for p in sets])"
+               if all(p.uncertainty is not None for p in static) else "")
+        why = (f" (from_repeats: the sets measure the level(s) {listed(shared)} more than once, and it averages the "
+               "measurements at each level)" if shared else "")
+        return (f"; several sets are one StaticPoints of all their points: graybox.{make}(np.concatenate("
                 "[p.ubar for p in sets]), np.concatenate([p.ybar for p in sets]), input_names=sets[0].input_names, "
-                "units=sets[0].units)")
+                f"units=sets[0].units{unc}){why}")
     if isinstance(static, (np.ndarray, tuple, list)):
         return "; make them of the levels and the settled outputs: graybox.StaticPoints(ubar, ybar)"
     if callable(static):

@@ -148,8 +148,9 @@ def regressor_columns(
         y = as_1d_finite(y, "y")
     # one input as a column (N, 1) goes through the coercion, which reads it as a Record does (the one input, 1-D):
     # taken as it is it was input 'u1', and the same samples as a list input 'u'
-    if not (isinstance(u, np.ndarray) and u.dtype == np.float64 and (u.ndim == 1 or (u.ndim == 2 and u.shape[1] != 1))
-            and np.isfinite(u).all()):
+    if not (isinstance(u, np.ndarray) and u.dtype == np.float64 and (u.ndim == 1 or (u.ndim == 2 and u.shape[1] != 1
+                                                                                    and u.shape[0] >= u.shape[1]))
+            and np.isfinite(u).all()):  # fewer samples than inputs: inputs as rows, said by the coercion
         u = as_input_array(u, "u", names)
     n = y.shape[0]
     if u.shape[0] != n:

@@ -145,7 +145,10 @@ def free_run_inputs(
         several = isinstance(u, (tuple, list)) and bool(u) and all(isinstance(r, Record) for r in u)
         if isinstance(u, Dataset) or type(u).__name__ == "DaskRecord" or several:  # by name: core._gram imports this
             raise TypeError(f"u must be a Record or an array of inputs, got {type(u).__name__}"
-                            f"{record_hint(u, 'model.simulate(r)')}")
+                            f"{record_hint(u, 'model.simulate(r)')}"
+                            # graybox.simulate shares this path and its caller may hold no model
+                            + (" (graybox.simulate: simulate(structure, theta, r) for each)"
+                               if several and what == "structure" else ""))
         u = as_input_array(u, "u", names)
         if y0 is None:
             if L > 0:

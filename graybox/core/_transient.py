@@ -30,7 +30,7 @@ from ._renamed import renamed_keyword
 from ._terms import transient_name, transient_source, transient_tau_text
 from ._validation import check_real, check_sequence
 
-__all__ = ["transient_inputs", "steady_levels", "recomputed_transients"]
+__all__ = ["transient_inputs", "steady_levels", "recomputed_transients", "refuse_transient_levels"]
 
 _Data = TypeVar("_Data", Record, Dataset, StaticPoints)
 
@@ -94,8 +94,13 @@ def transient_inputs(data: _Data, taus: Sequence[float], *, input_names: Sequenc
     ('u', 'u_tau10', 'u_tau30', 'u_tau100')
     """
     if not isinstance(data, (Record, Dataset, StaticPoints)):
+        several = isinstance(data, (list, tuple)) and data and all(isinstance(d, (Record, Dataset, StaticPoints))
+                                                                   for d in data)
         hint = (": sample it into static points first (e.g. curve.points(ubar, 'u')) and pass those"
-                if hasattr(data, "points") else "")
+                if hasattr(data, "points") else
+                # each record's transient inputs start from rest at its own first sample: one call per record
+                ": it takes one; call it once for each, [graybox.transient_inputs(r, taus=...) for r in records], "
+                "with the same taus" if several else "")
         raise TypeError(f"transient_inputs: data must be a Record, a Dataset or StaticPoints, got "
                         f"{type(data).__name__}{hint}")
     tau_list = [check_real(t, "taus (seconds)", low=0, low_open=True) for t in
@@ -173,6 +178,21 @@ def steady_levels(ub: np.ndarray, names: Sequence[str], *, one_point: bool = Fal
     full = np.zeros((levels.shape[0], m))
     full[:, base] = levels
     return full
+
+
+def refuse_transient_levels(ub: np.ndarray, names: Sequence[str], name: str = "ubar") -> None:
+    """``ValueError`` naming the transient inputs among ``names`` to which the points ``ub`` (shape (m,) or (M, m),
+    columns in the order of ``names``) give a level other than 0: a transient input is 0 at every steady state, so
+    no equilibrium, local model or settled state is at any other (the one check of every steady-state entry)."""
+    names = tuple(names)
+    a = np.atleast_2d(np.asarray(ub, dtype=float))
+    if a.ndim != 2 or a.shape[1] != len(names):
+        return  # the caller's shape checks say what is wrong
+    moving = [n for j, n in enumerate(names) if transient_source(n, names) is not None and np.any(a[:, j] != 0.0)]
+    if moving:
+        raise ValueError(f"{name} gives the transient input(s) {', '.join(moving)} a level other than 0, but a "
+                         "transient input is 0 at every steady state (it is computed from its input's changes, and "
+                         "decays while the input rests): leave it out or give 0")
 
 
 def recomputed_transients(u: np.ndarray, names: Sequence[str], Ts: float,

@@ -47,6 +47,8 @@ __all__ = [
     "check_path",
     "check_fields",
     "check_frame_columns",
+    "refuse_flags",
+    "SAMPLES",
 ]
 
 # graybox/, not graybox/core/: a frame in any subpackage is graybox's own
@@ -370,21 +372,41 @@ def real_array(x: object, name: str, what: str = "numbers") -> np.ndarray:
         raise TypeError(str(exc)) from None
 
 
-def refuse_flags(x: object, name: str, what: str = "numbers") -> None:
-    """``TypeError`` naming ``name`` when ``x`` is or holds a boolean or None, which a float conversion reads as 1
-    and NaN (a parameter of 1, a diverged run): the check :func:`real_array` and θ (:func:`check_theta`) share."""
+def refuse_flags(x: object, name: str, what: str = "numbers", *, none: bool = True) -> None:
+    """``TypeError`` naming ``name`` when ``x`` is or holds a boolean or (``none``) None, which a float conversion
+    reads as 1 and NaN (a parameter of 1, a diverged run): the check :func:`real_array`, θ (:func:`check_theta`)
+    and samples (:func:`as_1d_finite`, which leaves None to be said as a missing, non-finite value) share."""
+    flag = (bool, np.bool_, type(None)) if none else (bool, np.bool_)
     dtype = getattr(x, "dtype", None)  # numpy's, or pandas' (its "boolean" too: kind "b")
-    bad = x is None or isinstance(x, (bool, np.bool_)) or getattr(dtype, "kind", "") == "b"
+    look = x
+    if dtype is None and type(x).__module__.startswith("pandas") and hasattr(x, "dtypes"):
+        # a DataFrame: by its columns' dtypes; only columns of objects are looked into (not 10⁶ floats one by one)
+        kinds = list(x.dtypes)  # type: ignore[attr-defined]
+        dtype = np.dtype(bool) if any(getattr(k, "kind", "") == "b" for k in kinds) else np.dtype(object)
+        look = x[[c for c, k in zip(x.columns, kinds) if k == object]]  # type: ignore[attr-defined, index]
+    bad = isinstance(x, flag) or getattr(dtype, "kind", "") == "b"
     if not bad and (dtype is None or dtype == object):
         # None inside a list (or a pandas Series or DataFrame of objects) too: a float conversion reads it as NaN,
-        # which callers take for a diverged run
-        try:
-            raw = np.asarray(x, dtype=object)
-        except ValueError:  # ragged below the first level: float_array names it
-            raw = np.empty(0, dtype=object)
-        bad = any(v is None or isinstance(v, (bool, np.bool_)) for v in raw.flat)
+        # which callers take for a diverged run. By the items' types, met in C (map): a flat list of 10⁶ floats
+        # is not made an object array first, nor its items tested one by one in Python
+        kinds = set(map(type, look)) if isinstance(look, (list, tuple)) else None
+        if kinds is None or any(issubclass(k, (list, tuple, np.ndarray)) or _is_pandas_type(k) for k in kinds):
+            try:
+                raw = np.asarray(look, dtype=object)
+            except ValueError:  # ragged below the first level: float_array names it
+                raw = np.empty(0, dtype=object)
+            kinds = set(map(type, raw.flat))
+        bad = any(issubclass(k, flag) for k in kinds)
     if bad:
         raise TypeError(f"{name} must be {what}, got {short_value(x)}")
+
+
+def _is_pandas_type(t: type) -> bool:
+    return t.__module__.split(".")[0] == "pandas"
+
+
+#: What samples must be, said where a flag is among them: a logic signal is the caller's to convert, knowingly.
+SAMPLES = "numbers, not True/False (a logic signal, on/off: x.astype(float) reads it as 1 and 0)"
 
 
 def _finite_beyond(v: object) -> bool:
@@ -613,8 +635,10 @@ def check_path(value: object, name: str, *, file: bool = False) -> str | os.Path
 
 def as_1d_finite(x: object, name: str) -> np.ndarray:
     """``x`` as a read-only 1-D float64 copy, or an error naming ``name`` and the problem (``TypeError`` for
-    what is no array of numbers, ``ValueError`` for a wrong shape or a non-finite value)."""
+    what is no array of numbers or holds booleans, which numpy reads as 1 and 0, ``ValueError`` for a wrong shape or
+    a non-finite value, None's NaN among them)."""
     refuse_non_real(x, name)
+    refuse_flags(x, name, SAMPLES, none=False)
     a = float_array(x, name)
     if a.ndim == 2 and 1 in a.shape:
         cols = getattr(x, "columns", None) if type(x).__module__.startswith("pandas") else None

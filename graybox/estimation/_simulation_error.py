@@ -327,13 +327,21 @@ class SEProblem:
         other._memo = self._memo
         return other
 
-    def fingerprint(self) -> str:
-        """A hash of everything that defines the problem (for checkpoints)."""
+    def fingerprint(self, *, shapes: bool = True) -> str:
+        """A hash of everything that defines the problem (for checkpoints): each array with its dtype and shape, and
+        the count of records, so that the same numbers cut otherwise (one record of 6 samples or two of 3, a record
+        or static points) are another problem. ``shapes=False``: the hash of the versions that left them out, which
+        a checkpoint they wrote holds (recognised, and started over, as one of another version)."""
         h = hashlib.sha256()
         h.update(str(self.structure).encode())
         static = [] if self.static is None else [self.static.ubar, self.static.ybar]
+        if shapes:
+            h.update(f"records={len(self.records)}".encode())
         for a in [x for r in self.records for x in (r.u, r.y)] + static:
-            h.update(np.ascontiguousarray(a).tobytes())
+            a = np.ascontiguousarray(a)
+            if shapes:
+                h.update(f"{a.dtype.str}{a.shape}".encode())
+            h.update(a.tobytes())
         # which column is which input is :meth:`input_names`', beside it in a checkpoint
         if self.margin is not None:  # a checkpoint without a margin stays valid
             h.update(f"margin={self.margin!r}".encode())
@@ -886,10 +894,12 @@ def read_npz(path: Path) -> dict[str, np.ndarray]:
             return {k: z[k] for k in z.files}
 
 
-def _load_checkpoint(path: Path, meta: dict, n_terms: int | None = None, coords: bool = False) -> dict | None:
+def _load_checkpoint(path: Path, meta: dict, n_terms: int | None = None, coords: bool = False,
+                     unshaped: str | None = None) -> dict | None:
     """The state a checkpoint of a sweep of ``n_terms`` parameters (None: as many as it holds) holds, or None (with
     a warning) when another graybox version wrote it. ``coords``: the sweep needs its members in their optimiser's
-    coordinates too (``out["coords"]``; a centred problem's GA)."""
+    coordinates too (``out["coords"]``; a centred problem's GA). ``unshaped``: the problem's fingerprint as the
+    versions that hashed no shapes made it, whose checkpoint of it is one of another version."""
     def unreadable(exc: Exception) -> ValueError:
         return CheckpointError(f"checkpoint {path} is not a readable SE checkpoint ({exc}); delete it or choose "
                                "another checkpoint path")
@@ -915,6 +925,12 @@ def _load_checkpoint(path: Path, meta: dict, n_terms: int | None = None, coords:
     if meta.get("method") == "gradient":  # it draws nothing: its seed is no part of the problem
         stored, meta = ({k: v for k, v in d.items() if k != "seed"} for d in (stored, meta))
     other = sorted(k for k in _CHECKPOINT_IDENTITY if stored.get(k) != meta.get(k))
+    if other == ["problem"] and unshaped is not None and stored.get("problem") == unshaped:
+        # written before the fingerprint held the arrays' shapes: this problem's (or one over the same numbers cut
+        # otherwise, which that hash could not tell apart), by an older algorithm of fingerprints
+        said = f"{stored.get('graybox', '?')} (one whose fingerprint of a problem left out its arrays' shapes)"
+        stored = {**stored, "problem": meta["problem"], "graybox": said}
+        other = []
     if other:  # another problem's file, whichever version wrote it: never overwritten
         raise CheckpointError(f"checkpoint {path} was written for another problem (differs in: {', '.join(other)}); "
                               "delete it or choose another checkpoint path")
@@ -1037,7 +1053,8 @@ def _sweep(problem: SEProblem, lam: np.ndarray, method: str, settings: dict, see
     if problem.input_names() is not None:  # only when said: the default names' checkpoints stay valid
         meta["inputs"] = problem.input_names()
     path = None if checkpoint is None else checkpoint_path(checkpoint)
-    ck = _load_checkpoint(path, meta, n, coords is not None) if path is not None and path.exists() else None
+    ck = (_load_checkpoint(path, meta, n, coords is not None, problem.fingerprint(shapes=False))
+          if path is not None and path.exists() else None)
     if ck is not None:
         done = ck["done"]
         thetas[:done], costs[:done], nfev[:done] = ck["thetas"][:done], ck["costs"][:done], ck["nfev"][:done]

@@ -576,7 +576,8 @@ def plot_scatter(
     One panel per data set (or only ``data``); colour = variant, marker = structure (one marker
     for all when a data set has more structures than there are markers, 12: its legend then counts
     them); an axis is logarithmic where its values span a decade or more (tick labels never overlap).
-    Cells without a finite chosen model (infeasible, diverged, failed) are counted in the title.
+    Cells without a finite chosen model (infeasible, diverged, failed) are counted in the title; a J of 0 (an exact
+    fit) is drawn on a linear axis, and named in the title where a log axis, which has no 0, leaves it out.
 
     Parameters
     ----------
@@ -606,7 +607,14 @@ def plot_scatter(
         # of a large grid covers the points and runs off the figure): leaderboard.csv names them
         apart = len(structures) <= len(_MARKERS)
         marks = {s: _MARKERS[i] if apart else "o" for i, s in enumerate(structures)}
-        ok = _finite_pos(sub["JS_valid"]) & _finite_pos(sub["JSF"])
+        # a J of 0 (an exact fit) is drawn on a linear axis; a log axis has no 0, and the title says so
+        js, jsf = sub["JS_valid"].to_numpy(float), sub["JSF"].to_numpy(float)
+        finite = np.isfinite(js) & np.isfinite(jsf)
+        logs = {col: _spans_decades(x[finite]) for col, x in (("J_S", js), ("J_SF", jsf))}
+        zero = {col: finite & (x == 0) for col, x in (("J_S", js), ("J_SF", jsf))}
+        off = {col: int(z.sum()) for col, z in zero.items() if logs[col] and z.any()}
+        ok = finite & (js >= 0) & (jsf >= 0) & ~(zero["J_S"] & logs["J_S"]) & ~(zero["J_SF"] & logs["J_SF"])
+        ok = pd.Series(ok, index=sub.index)
         for (s, v), g in sub[ok].groupby(["structure", "variant"], sort=False):
             ax.plot(g["JS_valid"], g["JSF"], marks[s], color=colors[v], ms=7, alpha=0.8, ls="none")
         for v in variants:
@@ -627,7 +635,9 @@ def plot_scatter(
             ax.set_yticks([])
         ax.set_xlabel(f"J_S on the validation record{_sq(df, d)}")
         ax.set_ylabel(f"J_SF{_sq(df, d)}")
-        ax.set_title(f"{_shown(d)}: {int(ok.sum())} of {len(sub)} cells drawn")
+        said = "; ".join(f"{n} with {col} = 0" for col, n in off.items())
+        ax.set_title(f"{_shown(d)}: {int(ok.sum())} of {len(sub)} cells drawn"
+                     + (f" ({said}, which a log axis cannot show)" if said else ""))
         ax.grid(True, which="major", alpha=0.3)
         ax.legend(fontsize=7, ncol=2, loc="best")
     return fig

@@ -354,11 +354,13 @@ def stop_note(stop: str, chosen: int, closed: int, offsets: Mapping[str, float],
 _FAR_FROM_ZERO = 100.0
 
 
-def offset_note(data: object, process: Structure) -> str:
+def offset_note(data: object, process: Structure, rank_tol: float) -> str:
     """For an uncentred search that ran out of independent terms: a sentence naming the signals (y and the inputs
     ``process`` uses) whose mean over ``data`` exceeds :data:`_FAR_FROM_ZERO` times their spread (none held at one
-    level: :func:`is_held`), and pointing to ``centre=True``; ``""`` when none does (or the data are Dask records,
-    which centre=True does not take)."""
+    level: :func:`is_held`), and pointing to ``centre=True``; ``""`` when none does, when the candidates on the
+    centred signals are no more independent than on the raw ones (a two-level input's u² is affine in u about any
+    zero: centre=True runs out alike, the search's ``rank_tol`` judging both), or for Dask records, which centre=True
+    does not take."""
     if is_dask_data(data):
         return ""
     signals = {n: x for n, x in pooled_signals(data).items() if n == "y" or n in process.input_names}
@@ -369,7 +371,17 @@ def offset_note(data: object, process: Structure) -> str:
             # a held signal is no offset: centred it is zero, which centre=True cannot select on either
             if np.isfinite(mean) and np.isfinite(spread) and abs(mean) > _FAR_FROM_ZERO * spread and not is_held(x):
                 far.append(f"{name} (mean {mean:.4g}, spread {spread:.3g})")
-    if not far:
+    if not far or (_independent(process, centred_data(data, signal_offsets(data)), rank_tol)
+                   <= _independent(process, data, rank_tol)):
         return ""
     return ("the signals sit far from zero against their spread: " + ", ".join(far) + "; their raw monomials are "
             "nearly collinear with one another and the constant, and centre=True selects on them about their means")
+
+
+def _independent(process: Structure, data: object, rank_tol: float) -> int:
+    """How many of the candidates' columns on ``data`` are independent: singular values of the columns at unit RMS
+    above ``rank_tol`` of the largest (the searches' threshold on a column's orthogonalised share of its norm)."""
+    X, _ = stacked_regressors(process, as_records(data))
+    with np.errstate(all="ignore"):
+        s = np.linalg.svd(X / column_scales(X), compute_uv=False)
+    return int(np.sum(s > rank_tol * s[0])) if s.size and np.all(np.isfinite(s)) else 0

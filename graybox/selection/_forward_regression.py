@@ -732,7 +732,7 @@ def frols(
     except FewerTermsError as err:
         # raw monomials of signals far from their zero are nearly collinear with one another and the constant:
         # the likely cause of too few independent terms, said once for every place the search runs out
-        note = _centring.offset_note(data, candidates.process)
+        note = _centring.offset_note(data, candidates.process, rank_tol)
         if not note:
             raise
         raise FewerTermsError(f"{err}; {note}", err.reached) from None

@@ -655,7 +655,7 @@ def _result(run: _Search, stop: str, capped: bool, data: object) -> SEMPResult:
     path = pd.DataFrame(run.rows)
     if opt.mode == "n_terms" and not (path["n_terms"] == opt.n_terms).any():
         # as frols says: offsets make the raw monomials collinear, the likely cause (centre=True reaches the size)
-        note = _centring.offset_note(data, opt.process)
+        note = _centring.offset_note(data, opt.process, opt.rank_tol)
         raise ValueError(f"the search never reached {opt.n_terms} terms ({stop})" + (f"; {note}" if note else ""))
     # the same rule as frols: the size asked for, the smallest model within the tolerance, or the
     # criterion's minimum (warning when the size limit cut the curve or the search short)

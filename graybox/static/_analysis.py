@@ -48,7 +48,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import ClassVar
+from typing import ClassVar, Sequence
 
 import numpy as np
 
@@ -73,7 +73,7 @@ from ..core._validation import (Relocked, as_1d_finite, check_bool, check_fields
                                 check_theta, locked, real_array)
 from ..core._reprs import LISTED, exact_text, point_texts, short_repr
 from ._linearisation import (characteristic_roots, derivative_map, grid_coefficients, static_gains, static_powers,
-                             static_theta_gradient_of)
+                             split_power, static_theta_gradient_of)
 
 __all__ = [
     "cluster_key",
@@ -286,8 +286,12 @@ def static_coefficients(structure: Structure, thetas: np.ndarray, ubar: np.ndarr
     return _static_terms(structure, thetas, ubar)[0]
 
 
-def _static_terms(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`static_coefficients` and, alike, the sum of the magnitudes of the terms each is the sum of."""
+def _static_terms(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, *, common: bool = False
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`static_coefficients` and, alike, the sum of the magnitudes of the terms each is the sum of.
+
+    ``common``: each (member, level)'s coefficients over one power of two where one would leave the float range
+    (:func:`_cluster_terms`), which moves no root; the coefficients as they are otherwise."""
     cm = cluster_map(structure)
     th = np.atleast_2d(np.asarray(thetas, float))
     ub = np.asarray(ubar, float)
@@ -296,14 +300,33 @@ def _static_terms(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) ->
     D = max(cm.max_y_power, 1)
     coef = np.zeros((D + 1, th.shape[0], ub.size))
     size = np.zeros_like(coef)
+    terms, shift = _cluster_terms(cm.keys, sig, ub[None, :], common)
     with np.errstate(all="ignore"):
-        for c, (p, m) in enumerate(cm.keys):
-            term = sig[:, c, None] * ub[None, :] ** m
+        for p, term in terms:
             coef[p] += term
             size[p] += np.abs(term)
-    coef[1] -= 1.0
-    size[1] += 1.0
+    one = np.ldexp(1.0, -shift)  # the −ȳ of eq. (5), over the same power of two
+    coef[1] -= one
+    size[1] += one
     return coef, size
+
+
+def _cluster_terms(keys: Sequence[tuple[int, int]], sig: np.ndarray, ub: np.ndarray, common: bool
+                   ) -> tuple[list[tuple[int, np.ndarray]], np.ndarray]:
+    """Each cluster's σ ū^m (power p of y, the term), taken in mantissas and powers of two so that a product in the
+    float range stays in it where ū^m alone is not (1e-300 · 1e200²); ``sig`` (..., C), ``ub`` broadcasting against
+    ``sig[..., c, None]``. With ``common``, where a term's power of two passes 2^1000 every term of that (member,
+    level) is read over 2^(top − 1000), the shift returned (0 elsewhere, the terms bit for bit as without): a
+    coefficient beyond the float range (σ_u ū = 1e309) whose equation has its root inside it (over σ_yu ū = 1e298)."""
+    with np.errstate(all="ignore"):  # a folded θ of inf at ū = 0: NaN, no float root of that level
+        parts = [(p, *split_power(sig[..., c, None], ub, m)) for c, (p, m) in enumerate(keys)]
+    shape = np.broadcast_shapes(sig[..., 0, None].shape, np.shape(ub))
+    shift = np.zeros(shape, dtype=np.int64)
+    if common and parts:
+        top = np.max([np.where((mant != 0) & np.isfinite(mant), ex, 0) for _, mant, ex in parts], axis=0)
+        shift = np.where(top > 1000, top - 1000, 0).astype(np.int64)
+    with np.errstate(all="ignore"):  # a term beyond the float range even so: inf, no float root of that level
+        return [(p, np.ldexp(mant, ex - shift)) for p, mant, ex in parts], shift
 
 
 def continuum(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -> np.ndarray:
@@ -314,7 +337,7 @@ def continuum(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -> np.
     stays where it starts (for a rational structure, numerator and denominator of eq. (6) both vanish).
     ``thetas`` (P, n_terms), ``ubar`` (M,).
     """
-    coef, size = _static_terms(structure, thetas, ubar)
+    coef, size = _static_terms(structure, thetas, ubar, common=True)
     return np.all(np.abs(coef) <= DENOMINATOR_RTOL * size, axis=0)
 
 
@@ -564,12 +587,36 @@ def real_roots(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -> np
 
 def _roots_and_folds(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """:func:`real_roots`, and which of them are multiple roots (folds of the static curve), shape (P, M, D) each."""
-    coef, size = _static_terms(structure, thetas, ubar)
-    roots = (real_roots_upto_cubic_sized(coef, np.ascontiguousarray(size)) if coef.shape[0] <= 4
-             else _real_roots_companion(coef, size))
+    coef, size = _static_terms(structure, thetas, ubar, common=True)
+    if coef.shape[0] <= 4:
+        roots = real_roots_upto_cubic_sized(coef, np.ascontiguousarray(size))
+        # the closed forms balance the extreme coefficients by one scale, which leaves the float range where the
+        # roots' magnitudes span more than it (−1e11 beside 1e490): every root was lost, the one in range too; those
+        # polynomials go by the groups of the companion route, each in its own scale
+        wide = _unbalanced(coef)
+        if wide.any():
+            roots[wide] = _real_roots_companion(coef[:, wide][:, None], size[:, wide][:, None])[0]
+    else:
+        roots = _real_roots_companion(coef, size)
     if roots.shape[-1] < 2:  # a linear equation: one simple root
         return roots, np.zeros(roots.shape, dtype=bool)
     return merge_multiple_roots(np.ascontiguousarray(coef), np.ascontiguousarray(roots), np.ascontiguousarray(size))
+
+
+def _unbalanced(coef: np.ndarray) -> np.ndarray:
+    """Where one power of two balancing a polynomial's first and last non-zero coefficients (the closed forms'
+    scale) takes a coefficient c_k s^k out of the float range (with a margin), shape (P, M); ``coef`` (D + 1, P, M)."""
+    k = np.arange(coef.shape[0])[:, None, None]
+    with np.errstate(all="ignore"):
+        L = np.log2(np.abs(coef))  # −inf at a zero coefficient
+        nz = np.isfinite(L)
+        lo = np.argmax(nz, axis=0)
+        hi = coef.shape[0] - 1 - np.argmax(nz[::-1], axis=0)
+        Llo = np.take_along_axis(L, lo[None], axis=0)[0]
+        Lhi = np.take_along_axis(L, hi[None], axis=0)[0]
+        e = np.where(hi > lo, (Llo - Lhi) / np.where(hi > lo, hi - lo, 1), 0.0)
+        span = np.where(nz, L + k * np.round(e), 0.0)
+    return (coef.shape[0] > 2) & np.all(np.isfinite(coef), axis=0) & np.any(np.abs(span) > 1000, axis=0)
 
 
 def _linear_coefficients(structure: Structure, theta: np.ndarray, ybar: float, ubar: float) -> np.ndarray:
@@ -761,7 +808,7 @@ def multiple_root(structure: Structure, theta: np.ndarray, ub: float, ybar: floa
     A rational structure's eq. (6) is linear in ȳ: never. ``theta`` (n_terms,), ``ub`` and ``ybar`` scalars."""
     if is_rational(structure) or not np.isfinite(ybar):
         return False
-    coef, size = _static_terms(structure, np.asarray(theta, float)[None, :], np.array([float(ub)]))
+    coef, size = _static_terms(structure, np.asarray(theta, float)[None, :], np.array([float(ub)]), common=True)
     roots = np.full((1, 1, coef.shape[0] - 1), np.nan)
     if roots.shape[-1] < 2:  # a linear equation: one simple root
         return False
@@ -810,18 +857,21 @@ def is_rational(structure: Structure) -> bool:
     return all(t.power_of("y") <= 1 for t in structure if not t.is_noise)
 
 
-def _rational_terms(structure: Structure, thetas: np.ndarray, ubar: np.ndarray):
+def _rational_terms(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, *, common: bool = False):
+    """Eq. (6)'s numerator, denominator and the magnitude of the denominator's terms; ``common``: each (member,
+    level)'s three over one power of two where a term would leave the float range (as :func:`_static_terms`)."""
     cm = cluster_map(structure)
     th = np.asarray(thetas, dtype=float)
     with np.errstate(all="ignore"):  # as in _static_terms: a folded θ beyond the float range leaves no equilibrium
         sig = th @ cm.R.T  # (C,) or (P, C)
     ub = np.asarray(ubar, dtype=float)
+    terms, shift = _cluster_terms(cm.keys, sig, ub, common)
+    one = np.ldexp(1.0, -shift)
     num = np.zeros(sig.shape[:-1] + ub.shape)
-    den = np.ones_like(num)
-    size = np.ones_like(num)
+    den = np.broadcast_to(one, num.shape).copy()
+    size = den.copy()
     with np.errstate(all="ignore"):
-        for c, (p, m) in enumerate(cm.keys):
-            term = sig[..., c, None] * ub**m
+        for p, term in terms:
             if p == 0:
                 num += term
             else:
@@ -873,13 +923,13 @@ def vanishing_denominator(structure: Structure, theta: np.ndarray, ubar: np.ndar
     theta : ndarray, shape (n_terms,)
     ubar : ndarray, shape (M,)
     """
-    _, den, size = _rational_terms(structure, theta, np.asarray(ubar, float))
+    _, den, size = _rational_terms(structure, theta, np.asarray(ubar, float), common=True)
     return denominator_vanishes(den, size)
 
 
 def _rational_roots(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -> np.ndarray:
     """Eq. (6) for many members, shape (P, M); NaN where the denominator vanishes."""
-    num, den, size = _rational_terms(structure, np.atleast_2d(thetas), ubar)
+    num, den, size = _rational_terms(structure, np.atleast_2d(thetas), ubar, common=True)
     with np.errstate(all="ignore"):
         return np.where(denominator_vanishes(den, size), np.nan, num / den)
 
@@ -894,7 +944,7 @@ def rational_static_curve(structure: Structure, theta: np.ndarray, ubar: np.ndar
     ub = np.atleast_1d(np.asarray(ubar, dtype=float))
     if not is_rational(structure):
         raise ValueError("structure has a term with y to a power above 1: its static function is not rational")
-    num, den, size = _rational_terms(structure, theta, ub)
+    num, den, size = _rational_terms(structure, theta, ub, common=True)
     bad = denominator_vanishes(den, size)
     if bad.any():
         # + 0.0: an input of -0.0 is said as the level it is, 0.0

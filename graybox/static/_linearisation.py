@@ -34,7 +34,8 @@ from ..core._terms import Structure
 from ._equilibrium_kernels import entry_sums
 
 __all__ = ["DerivativeMap", "derivative_map", "local_coefficients", "grid_coefficients", "characteristic_roots",
-           "input_monomials_of", "static_powers", "static_partials", "static_gains", "static_theta_gradient_of", "static_gain_gradient"]
+           "input_monomials_of", "split_power", "times_monomials", "static_powers", "static_partials", "static_gains",
+           "static_theta_gradient_of", "static_gain_gradient"]
 
 
 #: Bytes of point sets (ū and their entries' input parts) a map remembers: a fit's static points take a few
@@ -73,6 +74,31 @@ def input_monomials_of(A: np.ndarray, ubar: np.ndarray) -> np.ndarray:
         for i in np.flatnonzero(A.any(axis=0)):
             out = out * _powers(ub[:, i], A[:, i])
     return out
+
+
+def split_power(c: np.ndarray, x: np.ndarray, m: int) -> tuple[np.ndarray, np.ndarray]:
+    """c · x^m, broadcast, as a mantissa and a power of two (``np.ldexp(*split_power(c, x, m))`` is the product), where
+    x^m alone may leave the float range and the product not (1e-300 · 1e200², 1e300 · 1e-200²): exact scaling, so an
+    in-range product is bit for bit ``c * x ** m``; 0 where c = 0 (no 0 · inf)."""
+    fx, ex = np.frexp(np.asarray(x, float))
+    fc, ec = np.frexp(np.asarray(c, float))
+    return fc * fx ** m, ec + ex * int(m)
+
+
+def times_monomials(c: np.ndarray, A: np.ndarray, ubar: np.ndarray) -> np.ndarray:
+    """c[..., t] · ∏_i ū_i^A_ti at each point, shape (..., M, n): ``c`` (P, 1, n) or (n,), ``A`` (n, m) integer input
+    powers, ``ubar`` (M, m); as :func:`input_monomials_of` times c, the powers taken in mantissas and powers of two
+    (:func:`split_power`'s reason)."""
+    f, e = np.frexp(np.asarray(ubar, float))
+    A = np.asarray(A, float)
+    return _times_scaled(c, input_monomials_of(A, f), e @ np.rint(A).astype(np.int64).T)
+
+
+def _times_scaled(c: np.ndarray, mant: np.ndarray, exp: np.ndarray) -> np.ndarray:
+    """c · mant · 2^exp without an intermediate leaving the float range (inf only where the product does)."""
+    fc, ec = np.frexp(np.asarray(c, float))
+    with np.errstate(all="ignore"):  # mant may be NaN⁰-like or inf at a non-finite level: carried, not warned of
+        return np.ldexp(fc * mant, ec + exp)
 
 
 @dataclass(frozen=True, eq=False)

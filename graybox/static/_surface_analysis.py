@@ -32,7 +32,7 @@ import numpy as np
 
 from . import _analysis as _static
 from ._analysis import Equilibrium, Reached, ascii_cluster_name, key_index
-from ._linearisation import input_monomials_of, static_gains, static_powers, static_theta_gradient_of
+from ._linearisation import input_monomials_of, static_gains, times_monomials, static_powers, static_theta_gradient_of
 from ..core._records import frame_inputs, labelled_point
 from ..core._terms import Structure, Term, carried_input_names, check_input_names, require_inputs, structure_of
 from ..core._transient import steady_levels
@@ -245,9 +245,10 @@ def points_of_inputs(ubar: object, names: tuple[str, ...], *, one_point: bool = 
 def _folded(structure: Structure, thetas: np.ndarray, ub: np.ndarray, inputs: tuple[str, ...]):
     """The skeleton structure and θ'[p, j, t] = θ_pt g_t(ū_j), shape (P, M, n_terms)."""
     sk = _skeleton(structure)
-    g = input_monomials(structure, ub, inputs)
-    with np.errstate(all="ignore"):  # θ_t ū^a beyond the float range: inf, a point with no float equilibrium
-        return sk, np.atleast_2d(np.asarray(thetas, float))[:, None, :] * g[None, :, :]
+    names = surface_inputs(structure, inputs)
+    # θ_t ū^a in range where ū^a alone is not (1e-300 · 1e200²); beyond it, inf: a point with no float equilibrium
+    return sk, times_monomials(np.atleast_2d(np.asarray(thetas, float))[:, None, :], static_powers(structure, names)[1],
+                               points_of_inputs(ub, names))
 
 
 def surface_equilibria(structure: Structure, theta: np.ndarray, ubar: np.ndarray, *,
