@@ -673,6 +673,26 @@ def test_settling_time_is_not_held_up_by_the_round_off_of_the_step_response():
         assert fast.settling_time(band=band) == np.ceil(np.log(band) / np.log(0.3))
 
 
+def test_operating_points_named_by_input_in_a_dict_are_read_by_name_and_none_is_said_to_be_empty():
+    # was: local_model(model, {"u2": 0.5, "u1": 1.0}) raised "ubar must be input levels (numbers), got dict" (a
+    # Series of the same levels was read by name; GainBounds and ubar_range take dicts by name), and
+    # operating_curve(model, []) "ubar must have shape (M,) ... got shape (0,)", a shape it has
+    by_name = gb.local_model(TWO_INPUTS, {"u2": 0.5, "u1": 1.0}, Ts=0.1)
+    in_order = gb.local_model(TWO_INPUTS, [1.0, 0.5], Ts=0.1)
+    assert by_name.ubar == pytest.approx(in_order.ubar) and by_name.ybar == pytest.approx(in_order.ybar)
+    curve = gb.operating_curve(TWO_INPUTS, {"u2": [0.5, 1.2], "u1": [1.0, 0.6]}, Ts=0.1)
+    np.testing.assert_allclose(curve.ybar, TWO_INPUTS.static_curve([[1.0, 0.5], [0.6, 1.2]]), rtol=1e-12)
+    assert TWO_INPUTS.static_curve({"u2": 0.5, "u1": 1.0}) == pytest.approx(in_order.ybar)
+    with pytest.raises(ValueError, match=r"'u3'.*\['u1', 'u2'\].*each input's name"):
+        gb.local_model(TWO_INPUTS, {"u1": 1.0, "u3": 0.5}, Ts=0.1)
+    with pytest.raises(ValueError, match=r"different numbers of levels \{'u1': 2, 'u2': 1\}"):
+        gb.operating_curve(TWO_INPUTS, {"u1": [1.0, 0.6], "u2": 0.5}, Ts=0.1)
+    with pytest.raises(TypeError, match=r"ubar\['u2'\] must be a real number, got True"):
+        gb.local_model(TWO_INPUTS, {"u1": 1.0, "u2": True}, Ts=0.1)
+    with pytest.raises(ValueError, match="no input level"):
+        gb.operating_curve(reference.paper_model(15), [], Ts=0.05)
+
+
 def test_a_transient_inputs_level_other_than_0_is_refused_alike_by_every_steady_state_entry():
     """local_model took ū = (1, z̄ = 0.3) and gave a local model at ȳ = 3.2, an equilibrium the plant never rests at
     (a transient input is 0 at every steady state), where narx_steady_state refused the same ū: one check now

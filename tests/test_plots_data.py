@@ -86,3 +86,20 @@ def test_fig3_range_labels_and_axes():
         plot_record(r, start=5, stop=5)
     with pytest.raises(ValueError, match="pair"):
         plot_record(r, axes=[axes[0]])
+
+
+def test_static_curve_draws_models_beside_the_points():
+    # was: plot_static_curve(points, [black, gray]) raised "curve must be a StaticCurve ... got Model", and the README
+    # drew each model by hand (ax.plot(ubar, model.static_curve(ubar, strict=False))); plot_surface_slices takes models
+    import graybox as gb
+
+    model = gb.Model(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"], [2.0, 0.5, 0.4, -0.001], name="heater")
+    pts = gb.StaticPoints([20.0, 40.0, 60.0], model.static_curve([20.0, 40.0, 60.0]) + 0.1, units=("%", "degC"))
+    fig = plot_static_curve(pts, [model, StaticCurve.fit(pts, degree=2)], margin=0.1)
+    line = fig.axes[0].lines[0]
+    assert line.get_label() == "heater"
+    x = line.get_xdata()
+    assert x[0] == pytest.approx(16.0) and x[-1] == pytest.approx(64.0)  # the points' range widened by margin
+    np.testing.assert_allclose(line.get_ydata(), 2 * (2.0 + 0.4 * x - 0.001 * x ** 2), rtol=1e-12)  # ȳ = f(ū)/(1 − 0.5)
+    with pytest.raises(ValueError, match="heater.*give points to set the range"):
+        plot_static_curve(curve=model)

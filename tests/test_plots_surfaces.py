@@ -145,3 +145,27 @@ def test_slices_refuse_a_bad_label_pair_before_reading_the_surfaces():
         plot_surface_slices(other, pts)
     with pytest.raises(ValueError, match="input_labels must be a pair"):
         plot_surface_slices(other, pts, input_labels=("x",))
+
+
+def test_slices_take_a_model_as_its_static_surface_and_the_input_on_the_axis_by_name():
+    # was: plot_surface_slices(model, points) raised "surface must be a callable ... got Model" (a model's surface had
+    # to be passed as model.static_curve), and against="inlet" "must be an integer", where plot_static_band takes
+    # against by name
+    from graybox import Model
+
+    model = Model(["1", "y(k-1)", "flow(k-1)", "inlet(k-1)", "flow(k-1)inlet(k-1)"], [0.5, 0.5, 0.2, 0.3, 0.01],
+                  name="tank", input_names=("flow", "inlet"))
+    U = np.array([[2.0, 10.0], [2.0, 30.0], [6.0, 10.0], [6.0, 30.0]])
+    pts = StaticPoints(U, model.static_curve(U), input_names=("flow", "inlet"), units=("", "degC"))
+    by_name = plot_surface_slices(model, pts, against="inlet")
+    by_position = plot_surface_slices(model.static_curve, pts, against=1)
+    for a, b in zip(by_name.axes[0].get_lines(), by_position.axes[0].get_lines()):
+        np.testing.assert_allclose(a.get_xydata(), b.get_xydata(), rtol=1e-12)
+    assert by_name.axes[0].get_xlabel() == "input inlet"
+    legend = plot_surface_slices([model, model.static_curve], pts).axes[0].get_legend().get_texts()
+    assert legend[0].get_text().startswith("tank, input inlet = ")
+    with pytest.raises(ValueError, match=r"against='speed' names no input of \('flow', 'inlet'\)"):
+        plot_surface_slices(model, pts, against="speed")
+    one = Model(["y(k-1)", "u(k-1)"], [0.5, 1.0], name="one input")
+    with pytest.raises(ValueError, match="one input has no surface"):
+        plot_surface_slices(one, pts)

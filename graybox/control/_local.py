@@ -572,6 +572,8 @@ def _as_points(model: Model, ubar: object, one_point: bool = False) -> np.ndarra
         ub = np.atleast_1d(ub).reshape(-1, 1) if ub.ndim <= 1 else ub
     elif ub.ndim == 1 and ub.size == m:
         ub = ub[None, :]
+    if ub.size == 0:  # shape (0,) is (M,) with M = 0: the fault is the missing levels, not the shape
+        raise ValueError(f"ubar holds no input level: give one ū or more (of the inputs {model.input_names})")
     if ub.ndim != 2 or ub.shape[1] != m or ub.shape[0] == 0:
         raise ValueError(f"ubar must have shape (M,) for one input or (M, {m}) for {m} inputs "
                          f"{model.input_names}, got shape {np.shape(ubar)}")
@@ -767,8 +769,9 @@ def local_model(model: Model, ubar: float | Sequence[float] | np.ndarray, *, Ts:
     model : Model
         A polynomial NARX model (a ``NeuralModel`` gets a ``TypeError``).
     ubar : float or array_like, shape (m,)
-        The operating input (input units); one value per input, in ``model.input_names`` order
-        (transient inputs left out are 0, their level at every steady state).
+        The operating input (input units); one value per input, in ``model.input_names`` order, or
+        a dict or pandas Series by input name (``{"flow": 7.0, "inlet": 20.0}``; transient inputs left
+        out are 0, their level at every steady state).
     Ts : float, optional
         Sampling period (s); default the model's own (``model.Ts``, the period it was identified at;
         ``data`` at another period is refused, and so is a ``Ts`` other than a model's own but for its 1 s, the
@@ -993,9 +996,10 @@ def operating_curve(model: Model, ubar: Sequence[float] | np.ndarray, *, Ts: flo
     model : Model
         A polynomial NARX model.
     ubar : array_like, shape (M,) or (M, m)
-        Operating inputs (input units); transient inputs left out are 0, their level at every
-        steady state (levels of shape (M, 1), or (M,) for M ≠ m, for a one-input plant's model with
-        them: m values could be one point as well, and are refused).
+        Operating inputs (input units), columns in ``model.input_names`` order, or a dict or pandas
+        DataFrame by input name (``{"flow": [2.0, 7.0], "inlet": [20.0, 20.0]}``); transient inputs left
+        out are 0, their level at every steady state (levels of shape (M, 1), or (M,) for M ≠ m, for a
+        one-input plant's model with them: m values could be one point as well, and are refused).
     Ts : float, optional
         Sampling period (s); default the model's own (``model.Ts``, the period it was identified at;
         ``data`` at another period is refused, and so is a ``Ts`` other than a model's own but for its 1 s, the

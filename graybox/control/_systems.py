@@ -216,7 +216,8 @@ def narx_steady_state(model: Model, ubar: float | np.ndarray, ybar: float, *, no
         A polynomial NARX model.
     ubar : float or array_like, shape (m,)
         The constant input (input units), one value per input in ``model.input_names`` order (a
-        pandas Series labelled by the inputs, e.g. a DataFrame's row, is read by its labels;
+        dict by input name, or a pandas Series labelled by the inputs, e.g. a DataFrame's row, is read by
+        its labels;
         transient inputs left out are 0, their level at every steady state, and any other level of one the
         model uses is refused: :func:`narx_iosystem` computes it, and it decays there).
     ybar : float

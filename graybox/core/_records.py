@@ -36,10 +36,33 @@ def _is_series(x: object) -> bool:
 
 
 def labelled_point(x: object, names: Sequence[str]) -> bool:
-    """Whether ``x`` is a pandas Series whose index labels are the inputs ``names`` (a DataFrame's row): one
-    point ū by what it says, never levels of one input, whatever its values."""
+    """Whether ``x`` is a pandas Series whose index labels are the inputs ``names`` (a DataFrame's row), or a dict
+    of one number per input by name: one point ū by what it says, never levels of one input, whatever its values."""
+    if isinstance(x, Mapping):
+        return (len(x) == len(names) and sorted(str(c) for c in x) == sorted(names)
+                and all(np.ndim(v) == 0 for v in x.values()))
     return (_is_series(x) and len(x) == len(names)  # type: ignore[arg-type]
             and sorted(str(c) for c in x.index) == sorted(names))  # type: ignore[attr-defined]
+
+
+def _levels_by_name(x: Mapping[Any, Any], name: str) -> object:
+    """Steady levels given as a dict by input name (``{"flow": 7.0, "inlet": 20.0}``, as ``GainBounds`` takes
+    its bounds): the pandas Series (one number each: one point ū) or DataFrame (a sequence each) that
+    :func:`frame_inputs` reads by name."""
+    import pandas as pd  # only for a dict: `import graybox` stays fast
+
+    if not all(isinstance(k, str) for k in x):
+        raise TypeError(f"{name}: a dict of input levels is keyed by the inputs' names (str), got keys {list(x)!r}")
+    # each level a number, said by its key (a bool, None or text would be refused later as the whole Series)
+    cols = {k: np.array([check_real(e, f"{name}[{k!r}]") for e in np.asarray(v, dtype=object).reshape(-1)])
+            for k, v in x.items()}
+    if all(np.ndim(v) == 0 for v in x.values()):
+        return pd.Series([c[0] for c in cols.values()], index=list(cols))
+    sizes = {k: len(v) for k, v in cols.items()}
+    if len(set(sizes.values())) > 1:
+        raise ValueError(f"{name}: the dict gives the inputs different numbers of levels {sizes}: one level each "
+                         "(one point ū) or equally many (one point per position)")
+    return pd.DataFrame(cols)
 
 
 def output_series(y: object) -> object | None:
@@ -124,6 +147,9 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
     column that looks like time or a count of samples (strictly increasing in even steps; the others not) is refused
     unless it names an input, naming it: read by position it would be an input.
     """
+    by_name = steady and isinstance(x, Mapping)
+    if by_name:
+        x = _levels_by_name(x, name)  # type: ignore[arg-type]
     series = _is_series(x)
     if not (series or is_frame(x)):
         return x
@@ -140,7 +166,7 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
         return x
     cols = list(x.index if series else x.columns)
     labels = [str(c) for c in cols]
-    what = "Series' index labels" if series else "DataFrame's columns"
+    what = "dict's keys" if by_name else "Series' index labels" if series else "DataFrame's columns"
     # read by position, the output would be an input (a Series' labels are samples'); a column named as the
     # output's Series but holding other samples (another frame's signal of that name) is an input like any
     for out in ("y", *([label] if label not in (None, "y") else [])):
@@ -169,6 +195,8 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
         # one-column frame it came from, by name (its values are that input's levels, never one point)
         return frame_inputs(x.to_frame(), names, name, output, steady=steady)
     if not hits:
+        if by_name:  # a dict says its levels by name: none read by position
+            raise ValueError(f"{name}: the {what} {labels} name none of the inputs {list(expected)}")
         return x
     if len(labels) == len(expected) and sorted(labels) == sorted(expected):
         order = [labels.index(n) for n in expected]
@@ -188,6 +216,9 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
     said = (f"name only some of the inputs {list(expected)}" if missing else
             f"name every input {list(expected)}, some more than once" if repeated else
             f"name every input {list(expected)} and more columns")
+    if by_name:  # keys are names: nothing is read by position
+        raise ValueError(f"{name}: the {what} {labels} {said} (not inputs: {extra or 'none'}; inputs without a "
+                         f"level: {missing or 'none'}): key one level, or one sequence of levels, by each input's name")
     raise ValueError(f"{name}: the {what} {labels} {said} "
                      f"(not inputs: {extra or 'none'}; inputs without a column: {missing or 'none'}; repeated: "
                      f"{repeated or 'none'}): read by position they would land on other inputs. {fix}")

@@ -201,7 +201,8 @@ class Model(Relocked):
 
         With several inputs, the static surface at the points ``ubar`` of shape (M, m)
         (:func:`graybox.static_surface`): columns in ``input_names`` order, or a pandas DataFrame whose
-        columns are the ``input_names`` (read by name, any order); transient inputs
+        columns are the ``input_names`` (read by name, any order), or a dict by input name
+        (``{"flow": [2.0, 7.0], "inlet": [20.0, 20.0]}``, one number each for one point); transient inputs
         (:func:`graybox.transient_inputs`) left out are 0, their level at every steady state, so a
         one-input plant's model with them takes levels of shape (M, 1), or (M,) for M ≠ m (m values
         could be one point as well, and are refused). ``y0`` (output units, one for all

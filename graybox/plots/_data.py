@@ -16,6 +16,8 @@ from matplotlib.figure import Figure
 
 from ..static._curves import StaticCurve
 from ..core._records import Dataset, Record, StaticPoints
+from ..models._coerce import as_model
+from ..models._model import Model
 from ..core._reprs import LISTED
 from ..core._validation import check_count, check_int, check_real, check_sequence
 
@@ -129,9 +131,27 @@ def check_axes(axes: object, n: int, who: str, what: str = "") -> list[Axes]:
         raise TypeError(f"{who}: axes must hold matplotlib Axes, got {', '.join(bad)}")
     return axs
 
+def _model_of(c: object) -> bool:
+    """Whether ``c`` is a Model or a result that carries one (drawn as the model's static curve)."""
+    return isinstance(c, Model) or isinstance(getattr(c, "model", None), Model)
+
+
+class _ModelCurve:
+    """A model's static curve as a line of :func:`plot_static_curve`: over the points' range (it has no domain),
+    NaN where no equilibrium is reached, named as the model."""
+
+    domain = None
+
+    def __init__(self, model: Model) -> None:
+        self.model, self.name = model, model.name or "model"
+
+    def __call__(self, ubar: np.ndarray) -> np.ndarray:
+        return self.model.static_curve(ubar, strict=False)
+
+
 def plot_static_curve(
     points: StaticPoints | None = None,
-    curve: StaticCurve | Sequence[StaticCurve] | None = None,
+    curve: StaticCurve | Model | Sequence[StaticCurve | Model] | None = None,
     *,
     ax: Axes | None = None,
     xlabel: str = "input ū",
@@ -145,9 +165,10 @@ def plot_static_curve(
     ----------
     points : StaticPoints, optional
         Measured steady states (ū_i, ȳ_i), drawn as ``*`` markers without a line.
-    curve : StaticCurve or sequence of StaticCurve, optional
+    curve : StaticCurve, Model or a sequence of them, optional
         Curves drawn as lines over their domain (a curve without a domain is drawn over the
-        points' range, widened by ``margin``).
+        points' range, widened by ``margin``); a Model (or a result carrying one) is drawn as its
+        static curve over the points' range, NaN where it reaches no equilibrium.
     ax : matplotlib Axes, optional
         Draw here; by default a new 6.4 × 4.2 in figure is made.
     xlabel, ylabel : str
@@ -170,7 +191,7 @@ def plot_static_curve(
         When there is nothing to draw, or a curve has no domain and there are no points.
     TypeError
         ``points`` that are not :class:`~graybox.StaticPoints` (a Dataset's are ``data.static``), a
-        ``curve`` that is not a :class:`~graybox.StaticCurve` (or a sequence of them).
+        ``curve`` that is not a :class:`~graybox.StaticCurve` or Model (or a sequence of them).
     ValueError
         Points that vary several inputs (draw them with :func:`plot_surface_slices`); points that
         hold all inputs but one (a transient input's z̄ = 0 beside ū) are drawn against that one.
@@ -178,14 +199,15 @@ def plot_static_curve(
     levels, varied = varied_input_levels(points, "plot_static_curve")
     if varied is not None and xlabel == "input ū":
         xlabel = f"input {varied}"
-    curves = [] if curve is None else ([curve] if isinstance(curve, StaticCurve) else None)
+    curves = [] if curve is None else ([curve] if isinstance(curve, StaticCurve) or _model_of(curve) else None)
     if curves is None:
         given = list(curve) if isinstance(curve, Sequence) and not isinstance(curve, str) else [curve]
-        bad = [type(c).__name__ for c in given if not isinstance(c, StaticCurve)]
+        bad = [type(c).__name__ for c in given if not (isinstance(c, StaticCurve) or _model_of(c))]
         if bad:
-            raise TypeError(f"curve must be a StaticCurve or a sequence of them, got {', '.join(bad)} (a model's static "
-                            "curve: draw ax.plot(ubar, model.static_curve(ubar, strict=False)) on the figure)")
+            raise TypeError(f"curve must be a StaticCurve, a Model or a sequence of them, got {', '.join(bad)}")
         curves = given
+    # a model (or a result carrying one) is drawn as its static curve: NaN where it reaches no equilibrium
+    curves = [_ModelCurve(as_model(c, "curve")) if _model_of(c) else c for c in curves]
     if points is None and not curves:
         raise ValueError("plot_static_curve: give static points, a curve, or both")
     n_grid = check_count(n_grid, "n_grid", low=2)

@@ -1,7 +1,7 @@
 """Pictures of static surfaces ȳ(ū₁, ū₂): slices against one input, and contour maps, with static points.
 
 A *surface* here is anything that maps constant inputs of shape (K, 2) to outputs of shape (K,):
-a :class:`~graybox.StaticSurface`, a model's static surface wrapped in a function, or a plant's
+a :class:`~graybox.StaticSurface`, a model of two inputs (its static surface), or a plant's
 theoretical one (``lambda U: plant.static_pressure(U[:, 0], U[:, 1])``). Its ``name`` attribute,
 when it has one, labels it; a ``domain`` attribute (one (low, high) per input) sets the default
 ranges. A surface that names its inputs (``input_names``, as a StaticSurface does) is called with
@@ -21,6 +21,8 @@ from matplotlib.figure import Figure
 
 from ..core._validation import check_count, check_int, check_real, check_sequence
 from ..core._reprs import level_texts
+from ..models._coerce import as_model
+from ..models._model import Model
 from ._data import SLICES_NAMED, distinct_colours, legend_every, legend_text, on_level, unit_label
 
 __all__ = ["plot_surface_slices", "plot_surface_contours"]
@@ -28,16 +30,50 @@ __all__ = ["plot_surface_slices", "plot_surface_contours"]
 Surface = Callable[[np.ndarray], np.ndarray]
 
 
+class _ModelSurface:
+    """A model's static surface as a plot's surface: its ``static_curve`` (NaN where no equilibrium is reached, as
+    a picture shows it), named as the model and its inputs."""
+
+    def __init__(self, model: Model) -> None:
+        if model.n_inputs != 2:
+            raise ValueError(f"surface: model {model.name!r} has {model.n_inputs} input(s) {model.input_names}: "
+                             + ("a model of one input has no surface (plot_static_curve draws its curve)"
+                                if model.n_inputs == 1 else "a surface is drawn over two inputs"))
+        self.model, self.name, self.input_names = model, model.name or "model", model.input_names
+
+    def __call__(self, U: np.ndarray) -> np.ndarray:
+        return self.model.static_curve(U, strict=False)
+
+
+def _surface(s: object) -> Surface:
+    """One surface: a callable as it is, a Model (or a result carrying one) as its static surface."""
+    if isinstance(s, Model) or (not callable(s) and isinstance(getattr(s, "model", None), Model)):
+        return _ModelSurface(as_model(s, "surface"))  # type: ignore[arg-type]
+    if not callable(s):
+        raise TypeError(f"surface: each surface must be callable on ū of shape (K, 2) or a Model, got "
+                        f"{type(s).__name__}")
+    return s  # type: ignore[return-value]
+
+
 def _surfaces(surface: Surface | Sequence[Surface] | None) -> list[Surface]:
     if surface is None:
         return []
-    if callable(surface):
-        return [surface]
-    out = check_sequence(surface, "surface", "a callable on ū of shape (K, 2) or a sequence of them")
-    for s in out:
-        if not callable(s):
-            raise TypeError(f"surface: each surface must be callable on ū of shape (K, 2), got {type(s).__name__}")
-    return out
+    if callable(surface) or isinstance(surface, Model) or isinstance(getattr(surface, "model", None), Model):
+        return [_surface(surface)]
+    out = check_sequence(surface, "surface", "a callable on ū of shape (K, 2), a Model, or a sequence of them")
+    return [_surface(s) for s in out]
+
+
+def _against(against: object, names: tuple[str, ...] | None) -> int:
+    """The input on the horizontal axis, 0 or 1: by position, or by the name the points (else a surface) give it."""
+    if isinstance(against, str):
+        if names is None:
+            raise ValueError(f"against={against!r} names an input, but neither the points nor the surfaces name "
+                             "theirs: give its position, 0 or 1")
+        if against not in names:
+            raise ValueError(f"against={against!r} names no input of {names}")
+        return names.index(against)
+    return check_int(against, "against (the input on the horizontal axis)", low=0, high=1)
 
 
 def _input_labels(labels: object, names: tuple[str, ...] | None = None) -> tuple:
@@ -163,7 +199,7 @@ def plot_surface_slices(
     surface: Surface | Sequence[Surface] | None = None,
     points: object | None = None,
     *,
-    against: int = 0,
+    against: int | str = 0,
     at: Sequence[float] | None = None,
     urange: tuple[float, float] | None = None,
     ax: Axes | None = None,
@@ -180,13 +216,15 @@ def plot_surface_slices(
 
     Parameters
     ----------
-    surface : callable or sequence of callables, optional
-        Surfaces mapping ū of shape (K, 2) to ȳ of shape (K,) (module docs).
+    surface : callable, Model or a sequence of them, optional
+        Surfaces mapping ū of shape (K, 2) to ȳ of shape (K,) (module docs); a Model of two inputs (or a
+        result carrying one) is drawn as its static surface, NaN where no equilibrium is reached.
     points : StaticPoints, optional
         Static points with ``ubar`` of shape (K, 2); a point is drawn on the slice whose level its
         held input equals (to 1e-9 relative).
-    against : {0, 1}
-        The input on the horizontal axis (0: ū₁); the other one is held.
+    against : {0, 1} or str
+        The input on the horizontal axis (0: ū₁), or its name (the points', else a surface's); the
+        other one is held.
     at : sequence of float, optional
         Levels of the held input; default: the distinct levels of the points' held input, else 5
         levels across the surfaces' domain.
@@ -215,14 +253,14 @@ def plot_surface_slices(
     pts = _points(points)
     if not surfaces and pts is None:
         raise ValueError("plot_surface_slices: give a surface, static points, or both")
-    against = check_int(against, "against (the input on the horizontal axis)", low=0, high=1)
     n_grid = check_int(n_grid, "n_grid", low=2)
     check_count(n_grid, "n_grid", item_bytes=8 * n_grid)  # a grid of n_grid² points
     margin = check_real(margin, "margin", low=0)
     if input_labels is not None:
         _input_labels(input_labels)  # a bad pair refused before any other work, as plot_surface_contours does
-    held = 1 - against
     names = _plot_inputs(surfaces, points)
+    against = _against(against, names)
+    held = 1 - against
     input_labels = _input_labels(input_labels, names)
     if at is None:
         if pts is not None:
@@ -301,8 +339,9 @@ def plot_surface_contours(
 
     Parameters
     ----------
-    surface : callable
-        Maps ū of shape (K, 2) to ȳ of shape (K,) (module docs).
+    surface : callable or Model
+        Maps ū of shape (K, 2) to ȳ of shape (K,) (module docs); a Model of two inputs (or a result
+        carrying one) is drawn as its static surface, NaN where no equilibrium is reached.
     points : StaticPoints, optional
         Static points with ``ubar`` of shape (K, 2), drawn as filled circles.
     levels : int or sequence of float
