@@ -595,7 +595,8 @@ def _moot_split(folds: int | None, blocks: int | None, valid: tuple[gb.Record, .
                          "(folds= sets how many), or pass validation=")
 
 
-def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tuple[_Plan, _Form | None]:
+def _inputs(candidates, data, sp, validation, test, band, folds, blocks,
+            black_asked: bool = False) -> tuple[_Plan, _Form | None]:
     if not isinstance(candidates, gb.Structure):
         raise TypeError(f"candidates must be a candidate set (a Structure, e.g. graybox.Candidates(...)), got "
                         f"{type(candidates).__name__}")
@@ -650,6 +651,13 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
         splits = tuple((None, v, _block_edges(len(v), L, b, name)) for name, v in _named(valids, "validation"))
     else:
         splits = tuple((a, b, np.array([L, len(b)])) for a, b in _folds(idents, folds, L + 2))
+    if sp is not None and band is None and not black_asked and not (
+            isinstance(sp, gb.StaticPoints) and sp.uncertainty is not None):
+        # static points given, yet no band to hold a model to them: a black box would come back unannounced
+        warn("select_graybox: static information was given but no band (band=) and no uncertainty on the points, so "
+             "this search is a black box chosen by J_S alone (the static information only scores J_SF); give band=B "
+             "(output units²) or StaticPoints(..., uncertainty=δ) for a gray box, or band=numpy.inf to ask for a "
+             "black box", SelectionWarning)
     if sp is not None:
         # said here, once, after the errors: every job's fits silence it (a units mix-up must not go unsaid)
         # a black box (no band) is fitted without them: saying they extrapolate it would say they were used
@@ -1508,7 +1516,7 @@ def select_graybox(
     check_choice(rule, "rule", RULES)
     centre = check_bool(centre, "centre")
     ck = checkpoint_of(checkpoint)  # read and checked before the search
-    plan, form = _inputs(candidates, data, sp, validation, test, band, folds, blocks)
+    plan, form = _inputs(candidates, data, sp, validation, test, band, folds, blocks, no_requirement)
     constraints = _constraint_specs(constraints, plan.ident[0].input_names)
     rows = _structures(candidates, plan.ident, sizes, sources, include, form, centre)
     run = functools.partial(_run_jobs, executor=executor, workers=workers, client=client, scheduler=scheduler,
