@@ -518,3 +518,17 @@ def test_the_hint_for_several_sets_of_points_makes_them_when_followed(second, ma
     points = eval(code, {"np": np, "sets": sets, "StaticPoints": gb.StaticPoints})  # noqa: S307 (the hint's code)
     assert dict(zip(points.ubar.tolist(), points.ybar.round(12).tolist())) == made
     assert points.uncertainty is not None
+
+
+def test_a_one_input_models_levels_by_name_in_a_dict():
+    # local_model and the surfaces took {"u": ...} by the input's name; a one-input model's static_curve said
+    # "got dict" (hunt60e): the same levels by name give the same curve, gain and equilibria; a wrong name is named
+    import graybox as gb
+
+    m = gb.Model(["y(k-1)", "pump(k-1)", "pump(k-1)^2"], [0.5, 1.0, -0.1], input_names=("pump",))
+    lv = np.array([0.5, 1.0, 2.0])
+    np.testing.assert_array_equal(m.static_curve({"pump": lv}), m.static_curve(lv))
+    np.testing.assert_array_equal(m.static_gain({"pump": lv}), m.static_gain(lv))
+    assert m.equilibria({"pump": 1.0}) == m.equilibria(1.0)
+    with pytest.raises(ValueError, match="'u'.*name none of the inputs"):
+        m.static_curve({"u": lv})

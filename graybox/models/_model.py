@@ -11,7 +11,7 @@ from ..core import _simulation
 from ..static import _analysis as _static
 from ..static import _surface_analysis as _static_surface
 from ..core._equation_text import latex_equation
-from ..core._records import Record, check_fitted_on, check_period, check_units
+from ..core._records import Record, check_fitted_on, check_period, check_units, frame_inputs
 from ..core._validation import Relocked, check_int, check_real, check_sequence, check_str, check_theta, frozen
 from ..core._terms import Structure, check_input_names, require_inputs, structure_of
 
@@ -202,7 +202,8 @@ class Model(Relocked):
         With several inputs, the static surface at the points ``ubar`` of shape (M, m)
         (:func:`graybox.static_surface`): columns in ``input_names`` order, or a pandas DataFrame whose
         columns are the ``input_names`` (read by name, any order), or a dict by input name
-        (``{"flow": [2.0, 7.0], "inlet": [20.0, 20.0]}``, one number each for one point); transient inputs
+        (``{"flow": [2.0, 7.0], "inlet": [20.0, 20.0]}``, one number each for one point; with one input
+        ``{"u": [1.0, 2.0]}`` its levels); transient inputs
         (:func:`graybox.transient_inputs`) left out are 0, their level at every steady state, so a
         one-input plant's model with them takes levels of shape (M, 1), or (M,) for M ≠ m (m values
         could be one point as well, and are refused). ``y0`` (output units, one for all
@@ -214,14 +215,23 @@ class Model(Relocked):
         if self.n_inputs > 1:
             return _static_surface.static_surface(self.structure, self.theta, ubar, y0=y0, strict=strict,
                                            input_names=self.input_names)
-        return _static.static_curve(self.structure, self.theta, ubar, y0=y0, strict=strict)
+        return _static.static_curve(self.structure, self.theta, self._one_input(ubar), y0=y0, strict=strict)
+
+    def _one_input(self, ubar: object) -> object:
+        """A one-input model's levels given as a dict by its input's name (as local_model and the surfaces of
+        several inputs take them): its values; anything else as given (the static paths check it)."""
+        if isinstance(ubar, dict):
+            return np.asarray(frame_inputs(ubar, self.input_names, "ubar", steady=True), dtype=float).ravel()
+        return ubar
 
     def equilibria(self, ubar: float | np.ndarray) -> list[_static.Equilibrium]:
         """Every real equilibrium at ū ``ubar`` (a float, or a point of shape (m,) with several inputs) with its
         stability; see :func:`graybox.equilibria`."""
         if self.n_inputs > 1:
             return _static_surface.surface_equilibria(self.structure, self.theta, ubar, input_names=self.input_names)
-        return _static.equilibria(self.structure, self.theta, ubar)
+        one = self._one_input(ubar)
+        return _static.equilibria(self.structure, self.theta, one[0] if isinstance(ubar, dict) and one.size == 1
+                                  else one)
 
     def static_gain(self, ubar: np.ndarray, y0: float | None = None, *, strict: bool = True) -> np.ndarray:
         """dȳ/dū along the static curve at each ū of ``ubar``, shape (M,); with several inputs the gradient,
@@ -232,7 +242,7 @@ class Model(Relocked):
         if self.n_inputs > 1:
             return _static_surface.static_surface_gain(self.structure, self.theta, ubar, y0=y0, strict=strict,
                                                        input_names=self.input_names)
-        return _static.static_gain(self.structure, self.theta, ubar, y0=y0, strict=strict)
+        return _static.static_gain(self.structure, self.theta, self._one_input(ubar), y0=y0, strict=strict)
 
     @property
     def is_rational(self) -> bool:
