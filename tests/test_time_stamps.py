@@ -294,3 +294,18 @@ def test_a_saved_index_beside_an_input_is_refused_without_taking_its_step_for_se
     with pytest.raises(ValueError, match=r"column 'Unnamed: 0' .*looks like time or a count of samples.*df\[\['u'\]\], "
                                          r"with the sampling period \(s\) as Ts="):
         gb.Record(df, np.cos(np.arange(20.0)))
+
+
+# Unix time counted in ms (JavaScript's Date.now(), many IoT and logger exports), µs or ns, read as seconds, gave a
+# sampling period 1000, 10^6 or 10^9 times too long without a word: 1764000000000, 1764000000010, … read Ts = 10 s
+@pytest.mark.parametrize("unit, per_second", [("milliseconds", 1e3), ("microseconds", 1e6), ("nanoseconds", 1e9)])
+def test_unix_time_counted_in_a_fraction_of_a_second_is_refused_not_read_as_seconds(tmp_path, unit, per_second):
+    start = datetime(2025, 11, 24, 15, 0, tzinfo=timezone.utc).timestamp()
+    f = _csv(tmp_path / "ms.csv", [f"{round((start + k * 0.01) * per_second)}" for k in range(20)])
+    with pytest.raises(ValueError, match=rf"column 't'.*Unix time in {unit}.*2025-11-24 15:00:00 UTC.*"
+                                         r"step of 0\.01 s.*Ts="):
+        gb.load_record_csv(f, u="u", y="y", time="t")
+    # Unix time in seconds (to the 10 ms here), and seconds since LabVIEW's 1904 or NTP's 1900, are seconds
+    for offset in (0.0, 2082844800.0, 2208988800.0):
+        f = _csv(tmp_path / "s.csv", [f"{start + offset + k * 0.01:.2f}" for k in range(20)])
+        assert gb.load_record_csv(f, u="u", y="y", time="t").Ts == pytest.approx(0.01)

@@ -1030,7 +1030,8 @@ def load_record_csv(
         Name of the output column.
     time : str, optional
         Name of a time-stamp column: seconds as numbers (a column whose name states another unit,
-        e.g. ``t [ms]``, ``time (min)``, ``t_ms``, or ticks of one, ``Zeit [10ms]``, is refused), ISO 8601
+        e.g. ``t [ms]``, ``time (min)``, ``t_ms``, or ticks of one, ``Zeit [10ms]``, is refused, and so are numbers
+        that are a spreadsheet's serial dates or Unix time counted in ms, µs or ns, whatever the name), ISO 8601
         dates and times (``2026-11-20 09:14:03.5``, ``2026-11-20T09:14:03Z``, a TOA5 file's ``TIMESTAMP``; with a
         UTC offset the elapsed time is read, so a clock change is no jump, while local times without one that jump
         by an hour are refused as one), or clock times with seconds (``09:14:03.5``, midnight passed read as the
@@ -1326,6 +1327,27 @@ def _refuse_serial_dates(p: Path, col: str, t: np.ndarray) -> None:
                      "(pandas: (x - x[0]) * 86400), or leave time= out and give Ts=")
 
 
+#: Unix time (seconds since 1970-01-01 UTC) of 1980-01-01 and 2100-01-01: counted in ms, µs or ns, the instants
+#: between lie past 10,000 years read as seconds, where no elapsed or wall-clock time in seconds lies (Unix, GPS,
+#: LabVIEW's 1904 and NTP's 1900 epochs give at most 6e9 s), and the ranges of the three units do not overlap
+_UNIX_SPAN = (315532800.0, 4102444800.0)
+_SUBSECONDS = (("milliseconds", 1e3), ("microseconds", 1e6), ("nanoseconds", 1e9))
+
+
+def _refuse_unix_subseconds(p: Path, col: str, t: np.ndarray) -> None:
+    """A ``ValueError`` when numeric stamps are Unix time counted in milliseconds (JavaScript's ``Date.now()``, many
+    IoT and logger exports), microseconds or nanoseconds: every stamp an instant of 1980-2100 in that unit, where read
+    as seconds the record's period would be 1000, 10^6 or 10^9 times too long without a word."""
+    for unit, per_second in _SUBSECONDS:
+        if _UNIX_SPAN[0] * per_second <= t.min() and t.max() < _UNIX_SPAN[1] * per_second:
+            step = (t[-1] - t[0]) / (t.size - 1) / per_second
+            when = datetime(1970, 1, 1) + timedelta(seconds=float(t[0]) / per_second)
+            raise ValueError(f"{p}: column {col!r} holds {t[0]:.0f} and steps by {step * per_second:.6g}: Unix time "
+                             f"in {unit} ({when:%Y-%m-%d %H:%M:%S} UTC; a step of {step:.6g} s), not seconds, which "
+                             f"would make the sampling period {per_second:,.0f} times too long; convert the column to "
+                             f"seconds (pandas: x / {per_second:.0f}), or leave time= out and give Ts=")
+
+
 def _naive_iso_seconds(cells: Sequence[str]) -> np.ndarray | None:
     """:func:`_stamps` of ISO dates and times without a UTC offset, all written alike (one length), by numpy's
     parser (20 times faster than a cell at a time: 0.04 s for 200,000), to the nanosecond; None where it cannot
@@ -1377,6 +1399,7 @@ def _check_time(p: Path, col: str, t: np.ndarray, lines: np.ndarray, Ts: float |
         raise ValueError(f"{p}: column {col!r} has a single time stamp; the sampling period needs two")
     if shown is None:  # before the steps are judged: printed with 11 digits, serial dates step unevenly, or by 0
         _refuse_serial_dates(p, col, t)
+        _refuse_unix_subseconds(p, col, t)
     dt = np.diff(t)
     bad = np.flatnonzero(dt <= 0)
     if bad.size:
