@@ -550,3 +550,17 @@ def test_a_quoted_file_is_read_in_memory_of_a_few_times_its_size(tmp_path):
     a = load_record_csv(quoted, "u", "y", time="t")  # imports done before the peak is traced
     assert a.u.tolist() == [float(r[1]) for r in rows] and a.y.tolist() == [float(r[2]) for r in rows] and a.Ts == 1.0
     assert traced_peak(lambda: load_record_csv(quoted, "u", "y", time="t")) < 12 * quoted.stat().st_size
+
+
+def test_a_digit_group_separator_underscore_is_not_read(tmp_path):
+    """Python's float reads '1_000' as 1000 and '1_0.5' as 10.5, and the careful reader took them so (numpy's refuses
+    them): a grouped number read where every other thousands separator is refused, and a made-up one."""
+    for cell, kw in (("1_000", {}), ("1_0.5", {}), ("1_000,5", {"delimiter": ";", "decimal": ","})):
+        sep = kw.get("delimiter", ",")
+        f = write(tmp_path, sep.join("tuy") + "\n" + "".join(f"{k}{sep}{cell if k == 1 else k}{sep}2\n"
+                                                            for k in range(3)))
+        with pytest.raises(ValueError, match=rf"line 3, column 'u': '{cell}' is not a number.*thousands separator"):
+            load_record_csv(f, "u", "y", time="t", **kw)
+    f = write(tmp_path, "u,y\n1,2\n1_5,3\n")
+    with pytest.raises(ValueError, match=r"line 3, column 'u': '1_5' is not a number"):
+        load_static_csv(f, "u", "y")

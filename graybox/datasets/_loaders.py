@@ -341,6 +341,8 @@ def _refuse_swallowed(p: Path, text: str, row: Sequence[str], start: int, line: 
 def _numeric(cell: str, decimal: str) -> bool:
     """Whether a cell reads as a number (with the file's decimal mark)."""
     c = cell.strip()
+    if "_" in c:  # Python's digit groups, which float() reads and _number does not
+        return False
     try:
         float(c.replace(",", ".") if decimal == "," else c)
         return True
@@ -800,7 +802,11 @@ def _number(p: Path, line: int, col: str, cell: str, decimal: str, *, time: bool
     if c == "":
         raise ValueError(f"{p}: line {line}, column {col!r}: empty cell")
     hint = ""
-    if decimal == ",":
+    if "_" in c:  # float() reads Python's digit groups ('1_000' as 1000, '1_0.5' as 10.5); numpy's reader does not
+        hint = ("; it holds '_', which groups digits as a thousands separator does: it is not read, export the "
+                "numbers without it")
+        c = "?"
+    elif decimal == ",":
         if "." in c:  # in decimal-comma locales a point groups thousands: never guess
             hint = "; the decimal mark of this file is ',' (pass decimal='.' if it is not)"
             c = "?"
