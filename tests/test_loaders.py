@@ -564,3 +564,25 @@ def test_a_digit_group_separator_underscore_is_not_read(tmp_path):
     f = write(tmp_path, "u,y\n1,2\n1_5,3\n")
     with pytest.raises(ValueError, match=r"line 3, column 'u': '1_5' is not a number"):
         load_static_csv(f, "u", "y")
+
+
+def test_a_column_name_is_found_whatever_unicode_form_composes_its_accents(tmp_path):
+    """'Düse' typed (NFC: ü one character) against a header written decomposed (NFD: u and U+0308, as macOS file
+    tools and some exports write it) was refused as 'no column 'Drehzahl Düse'. Did you mean 'Drehzahl Düse'?', two
+    names that print alike and are the same text by Unicode's canonical equivalence. Either form now finds the
+    other; a lookalike that is another character (µ MICRO SIGN for μ) is still refused, named even for a name of
+    one character, which no close match found."""
+    import unicodedata
+
+    for written, asked in (("NFD", "NFC"), ("NFC", "NFD")):
+        col = unicodedata.normalize(written, "Drehzahl Düse")
+        f = write(tmp_path, f"t;{col};Druck\n0;1;2\n1;2;3\n2;3;5\n")
+        r = load_record_csv(f, unicodedata.normalize(asked, "Drehzahl Düse"), "Druck", time="t")
+        assert r.u.tolist() == [1.0, 2.0, 3.0] and r.y.tolist() == [2.0, 3.0, 5.0]
+        s = load_static_csv(f, ["t", unicodedata.normalize(asked, "Drehzahl Düse")], "Druck",
+                            input_names=["a", "b"])
+        assert s.ubar.tolist() == [[0.0, 1.0], [1.0, 2.0], [2.0, 3.0]]
+    f = write(tmp_path, "t,\u00b5,y\n0,1,2\n1,2,3\n2,3,5\n")
+    with pytest.raises(ValueError, match=r"no column '\u03bc'.*Did you mean '\u00b5'\? \(the file's '\u00b5' is "
+                                         r"U\+00B5 MICRO SIGN"):
+        load_record_csv(f, "\u03bc", "y", time="t")

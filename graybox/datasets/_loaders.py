@@ -89,6 +89,9 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
     own: line 1 is its first) or column of the first problem.
     """
     p = Path(path)
+    # a name typed composed (ü) and written decomposed (u and U+0308, as macOS tools write it), or the reverse, is the
+    # same text by Unicode's canonical equivalence, and printed alike: names are matched in one form (NFC)
+    wanted = {role: _nfc(n) for role, n in wanted.items()}
     names = list(wanted.values())
     blank = next((role for role, n in wanted.items() if not n.strip()), None)
     if blank is not None:  # it would match an unnamed column: pandas' index (to_csv's default), a trailing delimiter's
@@ -179,7 +182,7 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
     if header is None:
         raise ValueError(f"{p}: line {first}: the file is empty; expected a header line naming the columns, then "
                          "one sample per line")
-    header = [h.strip() for h in header]
+    header = [_nfc(h.strip()) for h in header]
     if not any(header):
         raise ValueError(f"{p}: line {first} is blank; expected a header line naming the columns, then one sample "
                          "per line")
@@ -448,9 +451,14 @@ def _skip_lines(raw: bytes, start: int, n: int) -> int:
     return start
 
 
+def _nfc(text: str) -> str:
+    """``text`` in Unicode's composed form (NFC): a column name as it is matched."""
+    return unicodedata.normalize("NFC", text)
+
+
 def _names_columns(line: str, names: Sequence[str]) -> bool:
     """Whether ``line``, split at one of the delimiters, holds every name of ``names`` as a cell."""
-    return any(set(names) <= {c.strip() for c in _split(line, d)} for d in _DELIMITERS)
+    return any(set(names) <= {_nfc(c.strip()) for c in _split(line, d)} for d in _DELIMITERS)
 
 
 def _refuse_header_block(p: Path, head: str, names: Sequence[str], first: int = 1) -> None:
@@ -471,7 +479,7 @@ def _refuse_header_block(p: Path, head: str, names: Sequence[str], first: int = 
     for i, line in enumerate(lines[1:], start=first + 1):
         # every header line behind '# ', the names' too: np.savetxt's header of several lines, a logger's comments
         bare = re.sub(r"^\s*#+\s*", "", line) if line.lstrip().startswith("#") else None
-        if bare is not None and (_names_columns(bare, names) or set(names) <= set(bare.split())):
+        if bare is not None and (_names_columns(bare, names) or set(names) <= set(_nfc(bare).split())):
             spaces = "" if _names_columns(bare, names) else " and delimiter=' ' (its columns are split at spaces)"
             raise ValueError(f"{p}: line {i} names the columns behind the comment marker '#' ({line!r}), as "
                              "np.savetxt writes a header (comments='# '), and the header was read from line "
@@ -979,6 +987,10 @@ def _missing_column_message(path: Path, role: str, col: str, header: Sequence[st
     # the same name but for case or a unit in brackets ('u' for 'u [%]', 'p' for 'P (kW)'): difflib's ratio
     # misses a short name beside its unit
     close += [h for h in header if _bare(h) == _bare(col) and h not in close]
+    # a character that prints alike but is another ('µ' MICRO SIGN for 'μ' MU), which a one-character name's ratio
+    # misses: alike in the compatibility form (NFKC)
+    close += [h for h in header if unicodedata.normalize("NFKC", h) == unicodedata.normalize("NFKC", col)
+              and h not in close]
     hint = f" Did you mean {' or '.join(repr(c) for c in close)}?{_lookalike(col, close[0])}" if close else ""
     if header and header[0].startswith("#") and (header[0].lstrip("#").strip() == col
                                                  or (len(header) == 1 and col in header[0].lstrip("#").split())):
