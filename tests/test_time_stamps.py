@@ -309,3 +309,13 @@ def test_unix_time_counted_in_a_fraction_of_a_second_is_refused_not_read_as_seco
     for offset in (0.0, 2082844800.0, 2208988800.0):
         f = _csv(tmp_path / "s.csv", [f"{start + offset + k * 0.01:.2f}" for k in range(20)])
         assert gb.load_record_csv(f, u="u", y="y", time="t").Ts == pytest.approx(0.01)
+
+
+# A short record of seconds at 100 kHz, 27.8 h into a run (100000, 100000.00001, … : 0.864 s of a day, 14 % off 1 s),
+# or at 10 Hz (100000.1 …: 8640 s of a day, 2.4 times 3600 s), was refused as a spreadsheet's serial dates: the window
+# of what the stamps' decimals leave unknown of the mean step (last decimal / (N − 1)) passed 14 % below 8 samples
+# and 140 % at 2. Stamps that increase strictly are taken for serial dates only within 10 % of a round period.
+@pytest.mark.parametrize("rate, n", [(1e5, 5), (1e5, 3), (10.0, 2), (20.0, 3)])
+def test_a_short_record_of_seconds_far_from_zero_is_not_taken_for_serial_dates(tmp_path, rate, n):
+    f = _csv(tmp_path / "s.csv", [f"{100000 + k / rate:.5f}" for k in range(n)])
+    assert gb.load_record_csv(f, u="u", y="y", time="t").Ts == pytest.approx(1 / rate, rel=1e-9)

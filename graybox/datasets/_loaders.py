@@ -1310,9 +1310,9 @@ def _refuse_serial_dates(p: Path, col: str, t: np.ndarray) -> None:
     writes for a date cell formatted as a number: 46000.5 is 2025-12-09 12:00; since 1904-01-01 in a workbook of
     the 1904 date system, which the message names too): every stamp a day of the years 1954-2201 (1958-2205) and
     the mean step a round period as a fraction of a day (1 s is 1.157e-5), to within what the digits the stamps are
-    written with leave unknown (at least 0.1 %), where read as seconds the record's period would be 86,400 times too
-    short without a word. Seconds that look so are sampled at 86.4 kHz / (1, 2, 5 …), a rate no
-    acquisition uses (100 kHz is 0.864 s of a day: 14 % off; 44.1 kHz 1.96 s: 2 %).
+    written with leave unknown (at least 0.1 %; at most 10 % where they increase strictly), where read as seconds
+    the record's period would be 86,400 times too short without a word. Seconds that look so are sampled at
+    86.4 kHz / (1, 2, 5 …), a rate no acquisition uses (100 kHz is 0.864 s of a day: 14 % off; 44.1 kHz 1.96 s: 2 %).
     The mean step, not the median: a General cell shows 11 digits, 1e-6 of a day, so 0.1 s steps print as 1e-6 or
     2e-6 (and are uneven), while their mean keeps the period (to 1e-6 day over the record: 4.5 % of 0.1 s at 20
     samples)."""
@@ -1331,7 +1331,13 @@ def _refuse_serial_dates(p: Path, col: str, t: np.ndarray) -> None:
         if np.all(np.abs(x - np.round(x)) < noise * 10.0**d):
             last = 10.0**-d
             break
-    if abs(seconds / near - 1) > max(1e-3, last * 86400 / ((t.size - 1) * near)):
+    window = max(1e-3, last * 86400 / ((t.size - 1) * near))
+    if np.all(np.diff(t) > 0):
+        # stamps that increase may be seconds: a short record's few decimals leave its mean step unknown by 14 % and
+        # more (100 kHz is 0.864 s of a day: 5 samples of 100000.00001 s steps were refused), and they are not said
+        # to be dates past 10 % off a round period; serial dates of steps below their 11 digits repeat
+        window = min(window, 0.1)
+    if abs(seconds / near - 1) > window:
         return
     # the file does not say which of Excel's two date systems wrote the numbers: both readings are named
     day = datetime(1899, 12, 30) + timedelta(days=float(t[0]))
