@@ -319,3 +319,16 @@ def test_unix_time_counted_in_a_fraction_of_a_second_is_refused_not_read_as_seco
 def test_a_short_record_of_seconds_far_from_zero_is_not_taken_for_serial_dates(tmp_path, rate, n):
     f = _csv(tmp_path / "s.csv", [f"{100000 + k / rate:.5f}" for k in range(n)])
     assert gb.load_record_csv(f, u="u", y="y", time="t").Ts == pytest.approx(1 / rate, rel=1e-9)
+
+
+# MATLAB's datenum (days since year 0: 739960.5 is 2025-12-09 12:00), as writematrix([datenum(t), u, y]) writes it,
+# read as seconds gave a period 86,400 times too short, as Excel's serial dates did before they were refused
+@pytest.mark.parametrize("seconds", [1.0, 0.1, 60.0])
+def test_matlab_datenums_are_refused_not_read_as_seconds(tmp_path, seconds):
+    first = datetime(2025, 12, 9, 12).toordinal() + 366 + 0.5
+    f = _csv(tmp_path / "dn.csv", [f"{first + k * seconds / 86400:.15g}" for k in range(20)])
+    with pytest.raises(ValueError, match=rf"MATLAB's datenum.*2025-12-09 12:00:00.*a step of {seconds:g} s.*Ts="):
+        gb.load_record_csv(f, u="u", y="y", time="t")
+    # seconds there, 205 h into a run, at the usual rates are seconds
+    f = _csv(tmp_path / "s.csv", [f"{740000 + k / 1000:.3f}" for k in range(20)])
+    assert gb.load_record_csv(f, u="u", y="y", time="t").Ts == pytest.approx(1e-3)

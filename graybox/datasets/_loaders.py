@@ -1049,7 +1049,7 @@ def load_record_csv(
     time : str, optional
         Name of a time-stamp column: seconds as numbers (a column whose name states another unit,
         e.g. ``t [ms]``, ``time (min)``, ``t_ms``, or ticks of one, ``Zeit [10ms]``, is refused, and so are numbers
-        that are a spreadsheet's serial dates or Unix time counted in ms, µs or ns, whatever the name), ISO 8601
+        that are a spreadsheet's serial dates, MATLAB's datenums or Unix time counted in ms, µs or ns), ISO 8601
         dates and times (``2026-11-20 09:14:03.5``, ``2026-11-20T09:14:03Z``, a TOA5 file's ``TIMESTAMP``; with a
         UTC offset the elapsed time is read, so a clock change is no jump, while local times without one that jump
         by an hour are refused as one), or clock times with seconds (``09:14:03.5``, midnight passed read as the
@@ -1305,19 +1305,25 @@ def _stamps(p: Path, col: str, cells: Sequence[str], lines: Sequence[int],
 _ROUND_PERIODS = np.array([m * 10.0**e for e in range(-3, 4) for m in (1, 2, 5) if m * 10.0**e <= 3600] + [60, 3600])
 
 
+#: MATLAB's datenum (days since year 0) of 1954-01-01 and 2202-01-01: seconds there are 8 days into a run
+_DATENUM_SPAN = (713685, 804265)
+
+
 def _refuse_serial_dates(p: Path, col: str, t: np.ndarray) -> None:
     """A ``ValueError`` when numeric stamps are a spreadsheet's serial dates (days since 1899-12-30, what Excel
     writes for a date cell formatted as a number: 46000.5 is 2025-12-09 12:00; since 1904-01-01 in a workbook of
-    the 1904 date system, which the message names too): every stamp a day of the years 1954-2201 (1958-2205) and
-    the mean step a round period as a fraction of a day (1 s is 1.157e-5), to within what the digits the stamps are
-    written with leave unknown (at least 0.1 %; at most 10 % where they increase strictly), where read as seconds
-    the record's period would be 86,400 times too short without a word. Seconds that look so are sampled at
+    the 1904 date system, which the message names too; or MATLAB's datenum, days since year 0: 739960.5): every stamp
+    a day of the years 1954-2201 (1958-2205) and the mean step a round period as a fraction of a day (1 s is
+    1.157e-5), to within what the digits the stamps are written with leave unknown (at least 0.1 %; at most 10 % where
+    they increase strictly), where read as seconds the record's period would be 86,400 times too short without a
+    word. Seconds that look so are sampled at
     86.4 kHz / (1, 2, 5 …), a rate no acquisition uses (100 kHz is 0.864 s of a day: 14 % off; 44.1 kHz 1.96 s: 2 %).
     The mean step, not the median: a General cell shows 11 digits, 1e-6 of a day, so 0.1 s steps print as 1e-6 or
     2e-6 (and are uneven), while their mean keeps the period (to 1e-6 day over the record: 4.5 % of 0.1 s at 20
     samples)."""
     ref = (t[-1] - t[0]) / (t.size - 1)
-    if not (t.min() >= 20000 and t.max() < 110000 and 0 < ref < 1):
+    matlab = _DATENUM_SPAN[0] <= t.min() and t.max() < _DATENUM_SPAN[1]
+    if not ((t.min() >= 20000 and t.max() < 110000) or matlab) or not 0 < ref < 1:
         return
     seconds = ref * 86400
     near = _ROUND_PERIODS[np.argmin(np.abs(np.log(_ROUND_PERIODS / seconds)))]
@@ -1339,6 +1345,13 @@ def _refuse_serial_dates(p: Path, col: str, t: np.ndarray) -> None:
         window = min(window, 0.1)
     if abs(seconds / near - 1) > window:
         return
+    if matlab:
+        day = datetime(1, 1, 1) + timedelta(days=float(t[0]) - 367)  # datenum(1, 1, 1) is 367
+        raise ValueError(f"{p}: column {col!r} holds {t[0]:.10g} and steps by {ref:.4g}: MATLAB's datenum (days since "
+                         f"year 0: {t[0]:.10g} is {day:%Y-%m-%d %H:%M:%S}; a step of {near:g} s), not seconds, which "
+                         "would make the sampling period 86,400 times too short; convert the column to seconds "
+                         "(MATLAB: (t - t(1)) * 86400) or write it as dates and times (datestr(t, 'yyyy-mm-dd "
+                         "HH:MM:SS.FFF')), or leave time= out and give Ts=")
     # the file does not say which of Excel's two date systems wrote the numbers: both readings are named
     day = datetime(1899, 12, 30) + timedelta(days=float(t[0]))
     mac = datetime(1904, 1, 1) + timedelta(days=float(t[0]))
