@@ -491,3 +491,19 @@ def test_an_operating_curve_of_two_inputs_round_trips_with_its_shapes():
     back = gb.from_json(gb.to_json(oc))
     assert back.ubar.shape == (2, 2) and back.gain.shape == (2, 2) and back.local_models[1].b.shape == (2, 1)
     same(oc, back)
+
+
+def test_a_graybox_file_an_editor_saved_in_another_encoding_is_named_so(tmp_path):
+    """A saved model renamed 'Kühler' in an editor that saves cp1252 ('ANSI', Windows Notepad before 2019) was refused
+    as 'not a graybox file (not UTF-8 text)': it is one, in another encoding, and no line or byte was named."""
+    path = tmp_path / "m.json"
+    text = gb.to_json(gb.Model(gb.Structure(["y(k-1)"]), [0.5], name="Kühler")).replace("Σ", "S")
+    path.write_bytes(text.encode("cp1252"))
+    line = 1 + text[:text.index("Kühler")].count("\n")
+    with pytest.raises(gb.GrayboxFileError, match=rf"m\.json: line {line} is not UTF-8 text \(byte 0xfc\): a graybox "
+                                                  r"file saved again in another encoding.*save it as UTF-8"):
+        gb.load(path)
+    path.write_bytes(b"\x00\x01\x02\xff\xfe garbage")
+    with pytest.raises(gb.GrayboxFileError, match=r"m\.json: not a graybox file: line 1 is not UTF-8 text \(byte "
+                                                  r"0xff\)"):
+        gb.read_header(path)

@@ -1212,8 +1212,15 @@ def _read(path: str | os.PathLike) -> str:
     enc = "utf-8-sig" if enc == "utf-8" else enc
     try:
         return raw.decode(enc)
-    except UnicodeDecodeError:
-        raise GrayboxFileError(f"{p}: not a graybox file (not UTF-8 text)") from None
+    except UnicodeDecodeError as exc:
+        line = raw[:exc.start].decode(enc, errors="replace").count("\n") + 1
+        where = f"line {line} is not {enc.removesuffix('-sig').upper()} text (byte {raw[exc.start]:#04x})"
+        if re.match(r'\s*\{\s*"format"\s*:\s*"graybox"', raw.decode("latin-1").removeprefix("\xef\xbb\xbf")):
+            # an edit saved by an editor in its own encoding (cp1252, "ANSI"): a graybox file all the same
+            raise GrayboxFileError(f"{p}: {where}: a graybox file saved again in another encoding (cp1252, Latin-1?) "
+                                   "after an edit; graybox files are UTF-8: open it in that encoding and save it as "
+                                   "UTF-8") from None
+        raise GrayboxFileError(f"{p}: not a graybox file: {where}") from None
 
 
 def load(path: str | os.PathLike, *, expect: type | tuple[type, ...] | None = None) -> Any:
