@@ -586,3 +586,18 @@ def test_a_column_name_is_found_whatever_unicode_form_composes_its_accents(tmp_p
     with pytest.raises(ValueError, match=r"no column '\u03bc'.*Did you mean '\u00b5'\? \(the file's '\u00b5' is "
                                          r"U\+00B5 MICRO SIGN"):
         load_record_csv(f, "\u03bc", "y", time="t")
+
+
+@pytest.mark.parametrize("tail, said", [("3,4", r"line 5 has 2 field\(s\), but column 'y' is field 3"),
+                                        ("3,4,", r"line 5, column 'y': empty cell")])
+def test_a_file_cut_off_in_its_last_line_says_so(tmp_path, tail, said):
+    """A file cut off mid-line (a copy or download interrupted, a logger still writing it) ends in a short line with no
+    line end: it was refused as a short line or an empty cell, no word of the cut; the same line ended is refused as
+    before, with no such word."""
+    f = write(tmp_path, "t,u,y\n0,1,2\n1,2,3\n2,3,4\n" + tail)
+    with pytest.raises(ValueError, match=said + r".*the file's last line, which has no line end: the file was cut off"):
+        load_record_csv(f, "u", "y", time="t")
+    f = write(tmp_path, "t,u,y\n0,1,2\n1,2,3\n2,3,4\n" + tail + "\n")
+    with pytest.raises(ValueError, match=said) as info:
+        load_record_csv(f, "u", "y", time="t")
+    assert "cut off" not in str(info.value)

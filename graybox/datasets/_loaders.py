@@ -236,6 +236,10 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
     read = reader.line_num  # lines read so far: a quoted cell may hold line breaks, so a sample may span lines
     ended = None  # the line from which every column read is empty
     last = 0  # the text's lines before the last sample
+    # a last line with no line end: where it is short, the file was cut off in it (a copy interrupted, a logger writing)
+    open_end = -1 if text().endswith(("\n", "\r")) else text().count("\n") + 1
+    cut = (": the file's last line, which has no line end: the file was cut off in the middle of it (a copy or "
+           "download interrupted, a logger still writing)? Copy the file again, or delete the line")
     for row in reader:
         line, read = read + first, reader.line_num  # the line the sample starts on, where its first cells are
         if not row or all(not c.strip() for c in row):
@@ -259,7 +263,8 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
                              "records there (several records of one plant go to the estimators as a list)")
         if len(row) < need:
             raise ValueError(f"{p}: line {line} has {len(row)} field(s), but column "
-                             f"{header[need - 1]!r} is field {need}{_other_delimiter_hint(row, delim)}")
+                             f"{header[need - 1]!r} is field {need}{_other_delimiter_hint(row, delim)}"
+                             + (cut if read == open_end else ""))
         if any(c.strip() for c in row[len(header):]):
             # a field past the header's last column shifts nothing we could trust: refuse
             raise ValueError(f"{p}: line {line} has {len(row)} fields but the header names {len(header)} "
@@ -271,6 +276,8 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
                              "gives the columns' units, pass units_row=True (they become the record's units)")
         for role, i in index.items():
             # a time column may hold dates or clock times: its cells are read when the column is whole (_stamps)
+            if read == open_end and not row[i].strip():
+                raise ValueError(f"{p}: line {line}, column {wanted[role]!r}: empty cell{cut}")
             values[role].append(row[i] if role == "time" else _number(p, line, wanted[role], row[i], dec))
         lines.append(line)
         last = line - first
