@@ -601,3 +601,24 @@ def test_a_file_cut_off_in_its_last_line_says_so(tmp_path, tail, said):
     with pytest.raises(ValueError, match=said) as info:
         load_record_csv(f, "u", "y", time="t")
     assert "cut off" not in str(info.value)
+
+
+@pytest.mark.parametrize("sep", [";", "\t"])
+@pytest.mark.parametrize("blank", [False, True])  # a blank line sends the file to the careful reader
+def test_a_grouped_number_past_the_sniffed_lines_of_whole_numbers_is_ambiguous(tmp_path, sep, blank):
+    """A ';' or tab file (a decimal-comma locale's) whose first 50 lines hold whole numbers only says nothing of its
+    decimal mark; a speed of 1.050 further on (Excel's '#.##0' format: 1050 rpm) was read as 1.05 without a word,
+    where the same number in the first lines is refused as ambiguous."""
+    speeds = [750 + 10 * (k % 20) for k in range(60)] + ["1.050", "1.100"]
+    lines = [sep.join(["t", "speed", "p"])] + [sep.join([str(k), str(s), str(k % 7)]) for k, s in enumerate(speeds)]
+    if blank:
+        lines.insert(30, "")
+    f = write(tmp_path, "\n".join(lines) + "\n")
+    with pytest.raises(ValueError, match=rf"line {62 + blank}, column 'speed': '1\.050' reads as 1\.050 or as 1050 "
+                                         r".*lines 1 to 50, whole numbers.*decimal='\.'"):
+        load_record_csv(f, "speed", "p", time="t")
+    r = load_record_csv(f, "speed", "p", time="t", decimal=".")
+    assert r.u[-2:].tolist() == [1.05, 1.1]
+    # a file whose first lines show the point as its decimal mark reads it so, as before
+    f = write(tmp_path, "\n".join(lines).replace(f"{sep}750{sep}", f"{sep}750.5{sep}", 1) + "\n")
+    assert load_record_csv(f, "speed", "p", time="t").u[-2:].tolist() == [1.05, 1.1]

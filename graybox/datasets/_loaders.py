@@ -177,7 +177,8 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
     if units_row:  # the first lines again, the units row blanked
         end = _skip_lines(raw, start, _SNIFF_LINES)
         head = _decode(p, raw, start, end)
-    delim, dec = _dialect(p, head, delimiter, decimal, first)
+    delim, dec, guessed = _dialect(p, head, delimiter, decimal, first)
+    sniffed = (first, first + min(_SNIFF_LINES, head.count("\n") + 1) - 1)  # the lines the mark was judged on
     header = next(csv.reader(io.StringIO(head, newline=""), delimiter=delim), None)
     if header is None:
         raise ValueError(f"{p}: line {first}: the file is empty; expected a header line naming the columns, then "
@@ -213,7 +214,11 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
         if header.count("RECORD") == 1:  # a TOA5 file's record numbers, read to find a gap (load_record_csv)
             wanted, index = {**wanted, "_record": "RECORD"}, {**index, "_record": header.index("RECORD")}
     text = (lambda: head) if end >= len(raw) else functools.cache(lambda: _decode(p, raw, start, len(raw)))
-    if cut is not None:  # the units row taken out: the samples' file lines are one further on
+    if guessed and raw.find(b".", start) >= 0 and _GROUPED_CELL.search(raw, start):
+        # a cell that reads as a decimal or a grouped integer (1.050) where no mark was seen: the careful reader
+        # names it if it is in a column read
+        fast = None
+    elif cut is not None:  # the units row taken out: the samples' file lines are one further on
         fast = _fast_columns(p, index, raw=cut, text=functools.cache(lambda: _decode(p, cut, 0, len(cut))),
                              delimiter=delim, decimal=dec, n_fields=len(header), reread=False, first=first)
         if fast is not None:
@@ -278,6 +283,8 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
             # a time column may hold dates or clock times: its cells are read when the column is whole (_stamps)
             if read == open_end and not row[i].strip():
                 raise ValueError(f"{p}: line {line}, column {wanted[role]!r}: empty cell{cut}")
+            if guessed and _GROUPED.match(row[i].strip()) and "." in row[i]:
+                raise ValueError(_grouped_message(p, line, wanted[role], row[i].strip(), sniffed))
             values[role].append(row[i] if role == "time" else _number(p, line, wanted[role], row[i], dec))
         lines.append(line)
         last = line - first
@@ -678,6 +685,8 @@ _CLOCK = re.compile(r"\d:\d\d|\d[-/.]\d{1,2}[-/.]\d")
 _DECIMAL_COMMA = re.compile(r"^[+-]?\d*,\d+(?:[eE][+-]?\d+)?$")
 # A decimal number that also reads as an integer with a thousands separator (1,234 or 1.234).
 _GROUPED = re.compile(r"^[+-]?[1-9]\d{0,2}[.,]\d{3}$")
+#: A whole cell (between delimiters ; or tab, line ends, quotes) that :data:`_GROUPED` reads with a point
+_GROUPED_CELL = re.compile(rb'(?:^|[;\t"])[ \t]*[+-]?[1-9][0-9]{0,2}\.[0-9]{3}[ \t]*(?=[;\t"\r\n]|$)', re.MULTILINE)
 # Digits in groups of three after a thousands separator (, . ' space, no-break or narrow no-break
 # space), maybe with a decimal part: what a spreadsheet's number format writes.
 _THOUSANDS = re.compile(r"^[+-]?\d{1,3}(?:([,.'\u2019 \u00a0\u202f])\d{3})(?:\1\d{3})*(?:[.,]\d*)?$")
@@ -693,14 +702,17 @@ def _name(d: str) -> str:
     return {"\t": "tab", ",": "','", ";": "';'"}.get(d, repr(d))
 
 
-def _dialect(p: Path, text: str, delimiter: str | None, decimal: str | None, first: int = 1) -> tuple[str, str]:
+def _dialect(p: Path, text: str, delimiter: str | None, decimal: str | None,
+             first: int = 1) -> tuple[str, str, bool]:
     """The delimiter and the decimal mark of a CSV text, from its header and first data lines.
 
     The delimiter is the one of ``, ; tab`` that splits the header into several columns and every
     sampled data line into as many; the decimal mark is ``,`` when numbers such as ``2,5`` appear
     (with ``;`` or tab as delimiter, or in quoted fields), else ``.``. A file that allows two
     readings, mixes delimiters, or uses a decimal comma with an unquoted comma delimiter is refused
-    with what was seen and what to pass. ``first`` is the file's line number of the text's first line.
+    with what was seen and what to pass. ``first`` is the file's line number of the text's first line. The third
+    value says whether the mark is ``.`` for want of any number with a mark in those lines (whole numbers only) beside
+    a ``;`` or tab delimiter, a decimal-comma locale's: a grouped number further on (``1.050``) is then ambiguous.
     """
     for name, v, example in (("delimiter", delimiter, "';'"), ("decimal", decimal, "','")):
         if v is not None and not isinstance(v, str):
@@ -717,14 +729,16 @@ def _dialect(p: Path, text: str, delimiter: str | None, decimal: str | None, fir
     data = [(i, ln) for i, ln in head[1:] if ln.strip()]
     if delimiter is None:
         delimiter = _detect_delimiter(p, head[0][1], data, head[0][0])
+    guessed = False
     if decimal is None:
-        decimal = _detect_decimal(p, head[0][1], data, delimiter)
+        decimal, seen = _detect_decimal(p, head[0][1], data, delimiter)
+        guessed = not seen and delimiter != ","
     if delimiter == decimal and '"' not in text:
         # only quotes keep a decimal comma from splitting a number in two
         raise ValueError(f"{p}: the delimiter is {_name(delimiter)} and so is the decimal mark, but no field is "
                          "quoted, so a number such as 2,5 would read as two columns; pass another delimiter= or "
                          "decimal=, or export the file with quoted fields")
-    return delimiter, decimal
+    return delimiter, decimal, guessed
 
 
 def _split(line: str, d: str) -> list[str]:
@@ -778,7 +792,8 @@ def _decimal_comma_cells(cells: Sequence[str]) -> bool:
     return len(cells) > 1 and all(_INTEGER.match(c) for c in cells if c)
 
 
-def _detect_decimal(p: Path, header: str, data: list[tuple[int, str]], delimiter: str) -> str:
+def _detect_decimal(p: Path, header: str, data: list[tuple[int, str]], delimiter: str) -> tuple[str, bool]:
+    """The decimal mark of the lines ``data``, and whether any number there has one (else ``.`` by default)."""
     seen: dict[str, list[tuple[int, int, str]]] = {",": [], ".": []}  # (line, field, cell): each mark's evidence
     for line, ln in data:
         for i, cell in enumerate(_split(ln, delimiter)):
@@ -807,7 +822,7 @@ def _detect_decimal(p: Path, header: str, data: list[tuple[int, str]], delimiter
                          f"(line {line}{col}: {c!r}, {c.replace(',', '.')} or {c.replace(mark, '')}); pass "
                          f"decimal={mark!r} if {mark!r} is the decimal mark, else export the numbers without "
                          "thousands separators")
-    return mark
+    return mark, bool(seen[mark])
 
 
 def _number(p: Path, line: int, col: str, cell: str, decimal: str, *, time: bool = False) -> float:
@@ -846,6 +861,16 @@ def _number(p: Path, line: int, col: str, cell: str, decimal: str, *, time: bool
     if not math.isfinite(v):
         raise ValueError(f"{p}: line {line}, column {col!r}: {cell.strip()!r} is not a finite number")
     return v
+
+
+def _grouped_message(p: Path, line: int, col: str, cell: str, lines: tuple[int, int]) -> str:
+    """What is ambiguous of a number ``cell`` (``1.050``) where the file's ``lines`` (first, last) showed no decimal
+    mark."""
+    return (f"{p}: line {line}, column {col!r}: {cell!r} reads as {cell} or as {cell.replace('.', '')} with a "
+            f"thousands separator, and the numbers on lines {lines[0]} to {lines[1]}, whole numbers, do not show which "
+            "decimal mark the file uses (a ';' or tab delimiter is a decimal-comma locale's, where a point groups "
+            "thousands); pass decimal='.' if '.' is the decimal mark, else export the numbers without thousands "
+            "separators")
 
 
 def _other_delimiter_hint(row: Sequence[str], delimiter: str) -> str:
@@ -1091,7 +1116,8 @@ def load_record_csv(
         thousands separator. Thousands separators (``1,234.5``, ``1.234,5``, ``1 234,5`` with a
         space or a no-break space) are never read: such a number is an error naming its line, and a
         file whose every decimal could also be an integer with a thousands separator (``1,234``
-        and no other decimal in the first 50 lines) is refused unless ``decimal=`` is given.
+        and no other decimal in the first 50 lines) is refused unless ``decimal=`` is given, and so is such a
+        number (``1.050``) further on in a ``;`` or tab file whose first 50 lines hold whole numbers only.
     encoding : str, optional
         The text encoding, any name Python knows (e.g. ``"cp1252"``, what Excel writes as "CSV"
         on Windows in Western Europe and the Americas; ``"utf-16-le"``). Default: UTF-8, or UTF-16
