@@ -79,8 +79,13 @@ def test_clock_times_pass_midnight_and_need_their_seconds(tmp_path):
     # 00:01, 00:02 … may be a stopwatch's minutes and seconds: read as hours and minutes, 60 times too long
     with pytest.raises(ValueError, match=r"line 2, column 't': '00:01' is not a number.*clock times \(09:14:03.5\)"):
         gb.load_record_csv(_csv(tmp_path / "mmss.csv", ["00:01", "00:02", "00:03"]), u="u", y="y", time="t")
-    with pytest.raises(ValueError, match=r"line 3, column 't': '25:00:00' is not a clock time.*'23:59:59' \(line 2\)"):
-        gb.load_record_csv(_csv(tmp_path / "bad.csv", ["23:59:59", "25:00:00"]), u="u", y="y", time="t")
+    # 25:00:00 is no clock time but an elapsed 25 h (a spreadsheet's [h]:mm:ss duration): after 23:59:59 in a clock
+    # column, a typo for 00:00:00, it is a step of an hour, refused as uneven; a minute out of range is no time at all
+    with pytest.raises(ValueError, match=r"uneven time stamps: step 3601 s from line 4 to line 5"):
+        gb.load_record_csv(_csv(tmp_path / "bad.csv", ["23:59:57", "23:59:58", "23:59:59", "25:00:00"]), u="u", y="y",
+                           time="t")
+    with pytest.raises(ValueError, match=r"line 3, column 't': '23:60:00' is not a clock time.*'23:59:59' \(line 2\)"):
+        gb.load_record_csv(_csv(tmp_path / "bad.csv", ["23:59:59", "23:60:00"]), u="u", y="y", time="t")
 
 
 @pytest.mark.parametrize("stamp", ["20.11.2026 09:14:{:02d}", "11/20/2026 09:14:{:02d}"])
@@ -332,3 +337,19 @@ def test_matlab_datenums_are_refused_not_read_as_seconds(tmp_path, seconds):
     # seconds there, 205 h into a run, at the usual rates are seconds
     f = _csv(tmp_path / "s.csv", [f"{740000 + k / 1000:.3f}" for k in range(20)])
     assert gb.load_record_csv(f, u="u", y="y", time="t").Ts == pytest.approx(1e-3)
+
+
+# An elapsed time past a day, as a spreadsheet's [h]:mm:ss duration writes it (a test stand's 'Elapsed' column:
+# 23:59:59, 24:00:00, 24:00:01 …, 100:00:00), was refused as 'not a clock time' at its first hour past 24, and a
+# first stamp of 99:59:58 as "'99:59:58' is not a clock time, as the column's first stamp '99:59:58' (line 2) is"
+@pytest.mark.parametrize("start_hour", [23, 99, 0])
+def test_elapsed_hours_past_a_day_are_read_as_a_duration(tmp_path, start_hour):
+    stamps = [start_hour * 3600 + 3597 + 1.5 * k for k in range(8)]  # across the next whole hour, 1.5 s apart
+    cells = [f"{int(s // 3600)}:{int(s // 60) % 60:02d}:{s % 60:04.1f}" for s in stamps]
+    f = _csv(tmp_path / "e.csv", cells)
+    r = gb.load_record_csv(f, u="u", y="y", time="t")
+    assert r.Ts == 1.5 and r.y.size == 8
+    f = _csv(tmp_path / "b.csv", ["09:61:00", "09:61:01"])  # a minute out of range, in the first stamp
+    with pytest.raises(ValueError, match=r"line 2, column 't': '09:61:00' is not a clock time \(09:14:03\.5\): its "
+                                         r"minute or second is out of range$"):
+        gb.load_record_csv(f, u="u", y="y", time="t")

@@ -1085,7 +1085,8 @@ def load_record_csv(
         dates and times (``2026-11-20 09:14:03.5``, ``2026-11-20T09:14:03Z``, a TOA5 file's ``TIMESTAMP``; with a
         UTC offset the elapsed time is read, so a clock change is no jump, while local times without one that jump
         by an hour are refused as one), or clock times with seconds (``09:14:03.5``, midnight passed read as the
-        next day; ISO's 24:00:00 is the next midnight, and a leap second, 23:59:60, is refused). Dates in
+        next day; ISO's 24:00:00 is the next midnight, hours past it, 26:13:05, an elapsed time as a spreadsheet's
+        [h]:mm:ss duration writes it, and a leap second, 23:59:60, is refused). Dates in
         another order (``20.11.2026``, ``11/20/2026``) are refused: leave ``time`` out and give ``Ts``, or
         convert the column. Stamps must increase strictly and evenly: every
         step within ``time_rtol`` × (median step) of the median step (and of what float64 resolves of
@@ -1259,7 +1260,7 @@ _ISO_STAMP = re.compile(r"(\d{4}-\d{2}-\d{2})[T ](\d{2}):(\d{2})(?::(\d{2})(?:[.
                         r"\s*(Z|[+-]\d{2}(?::?\d{2})?)?")
 #: A clock time without a date, as loggers that write the date in a column of its own: 09:14:03, 09:14:03.5 (its
 #: seconds required: 01:30 may be a stopwatch's minutes and seconds, read as hours and minutes it is 60 times too long)
-_CLOCK_STAMP = re.compile(r"(\d{1,2}):(\d{2}):(\d{2})(?:[.,](\d+))?")
+_CLOCK_STAMP = re.compile(r"(\d{1,3}):(\d{2}):(\d{2})(?:[.,](\d+))?")
 #: A date in another order (20.11.2026, 11/20/2026): which is the day is not told by the cell
 _OTHER_DATE = re.compile(r"\d{1,4}[./-]\d{1,2}[./-]\d{1,4}")
 
@@ -1271,7 +1272,8 @@ def _stamps(p: Path, col: str, cells: Sequence[str], lines: Sequence[int],
     Numbers are seconds. ISO 8601 dates and times (every cell one: ``2026-11-20 09:14:03.5``, a TOA5 file's
     ``TIMESTAMP``) are the seconds after the first stamp, the elapsed time where the stamps carry a UTC offset (a
     clock change then no jump); clock times (``09:14:03.5``; seconds required, as ``01:30`` may be a stopwatch's
-    minutes and seconds) the seconds after the first, a step back of more than 12 hours read as midnight passed.
+    minutes and seconds) the seconds after the first, a step back of more than 12 hours read as midnight passed, or,
+    where an hour passes 24 (``26:13:05``, a spreadsheet's [h]:mm:ss duration), elapsed times that count on.
     The fraction of a second is read to every digit written (a datetime keeps six).
     Other forms of dates (``20.11.2026``, ``11/20/2026``: which number is the day the cell does not say) are refused,
     naming how to pass them."""
@@ -1291,6 +1293,7 @@ def _stamps(p: Path, col: str, cells: Sequence[str], lines: Sequence[int],
     whole = np.empty(len(cells), dtype=np.int64)  # exact whole seconds
     frac = np.empty(len(cells))  # and their fraction
     aware = None
+    elapsed = False  # clock times past 24 h: a duration, whose hours count on past midnight
     for k, (line, c) in enumerate(zip(lines, shown)):
         m = form.fullmatch(c)
         try:
@@ -1316,20 +1319,27 @@ def _stamps(p: Path, col: str, cells: Sequence[str], lines: Sequence[int],
                                  "the seconds elapsed are not read across (the stamps either side are 2 s apart, "
                                  "read as 1 s); cut the file into two records there, or write the stamps in GPS or "
                                  "TAI time, which have none")
-            end_of_day = (h, mi, int(sec or 0), f) == ("24", "00", 0, f) and not (f or "0").strip("0")
-            # ISO 8601's 24:00:00 is the day's end, the next day's 00:00:00
-            clock = dt_time(0 if end_of_day else int(h), int(mi), int(sec or 0))  # refuses 25:00, 09:61
-            whole[k] = 86400 * (days + end_of_day) + 3600 * clock.hour + 60 * clock.minute + clock.second - shift
+            hour, minute, second = int(h), int(mi), int(sec or 0)
+            end_of_day = (hour, minute, second) == (24, 0, 0) and not (f or "0").strip("0")
+            # ISO 8601's 24:00:00 is the day's end, the next day's 00:00:00; a clock time's hour past it is an elapsed
+            # time past a day (a spreadsheet's [h]:mm:ss duration: 24:00:01, 100:00:00), whose hours count on
+            past_day = not iso and hour >= 24 and not end_of_day
+            dt_time(0 if end_of_day or past_day else hour, minute, second)  # refuses 25:00 of a date, 09:61
+            elapsed = elapsed or past_day
+            whole[k] = 86400 * days + 3600 * hour + 60 * minute + second - shift
             frac[k] = float("0." + f) if f else 0.0
         except ValueError as exc:
             if str(exc).startswith(str(p)):
                 raise
             kind = ("an ISO 8601 date and time (2026-11-20 09:14:03.5)" if iso
                     else "a clock time (09:14:03.5)")
+            if k == 0:  # the first stamp, of the form its column is read in, but a field out of range
+                raise ValueError(f"{p}: line {line}, column {col!r}: {c!r} is not {kind}: its "
+                                 f"{'date, hour, ' if iso else ''}minute or second is out of range") from None
             raise ValueError(f"{p}: line {line}, column {col!r}: {c!r} is not {kind}, as the column's first stamp "
                              f"{shown[0]!r} (line {lines[0]}) is") from None
     t = (whole - whole[0]).astype(float) + (frac - frac[0])
-    if not iso:  # a clock time past midnight starts the next day
+    if not iso and not elapsed:  # a clock time past midnight starts the next day
         t += 86400.0 * np.concatenate([[0], np.cumsum(np.diff(t) < -43200)])
     return t, shown
 
