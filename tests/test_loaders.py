@@ -622,3 +622,14 @@ def test_a_grouped_number_past_the_sniffed_lines_of_whole_numbers_is_ambiguous(t
     # a file whose first lines show the point as its decimal mark reads it so, as before
     f = write(tmp_path, "\n".join(lines).replace(f"{sep}750{sep}", f"{sep}750.5{sep}", 1) + "\n")
     assert load_record_csv(f, "speed", "p", time="t").u[-2:].tolist() == [1.05, 1.1]
+
+
+def test_the_header_again_in_the_file_is_named_as_two_files_joined(tmp_path):
+    """A logger that writes its header again after a restart, or two exports joined (cat run1.csv run2.csv), put the
+    column names again mid-file: refused as "line 5, column 'u': 'u' is not a number", no word of the header."""
+    f = write(tmp_path, "t;u;y\n0;1;2\n1;2;3\n2;3;4\nt;u;y\n0;4;5\n1;5;6\n")
+    with pytest.raises(ValueError, match=r"line 5 repeats the header \(line 1\): two files joined into one, or a "
+                                         r"logger restarted\?.*Cut the file there into two"):
+        load_record_csv(f, "u", "y", time="t")
+    with pytest.raises(ValueError, match=r"line 5 repeats the header \(line 1\)"):
+        load_static_csv(f, "u", "y")

@@ -254,6 +254,10 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
                              "units and processing codes): two files joined into one? Cut the file there into two "
                              "files, each read as a record (several records of one plant go to the estimators as a "
                              "list)")
+        if [_nfc(c.strip()) for c in row[:len(header)]] == header:  # read as a sample it was "'u' is not a number"
+            raise ValueError(f"{p}: line {line} repeats the header (line {first}): two files joined into one, or a "
+                             "logger restarted? Cut the file there into two files, each read on its own (several "
+                             "records of one plant go to the estimators as a list)")
         if read - (line - first) > 1:  # a quoted cell spans lines: it may hold samples a quote left open took in
             _refuse_swallowed(p, text(), row, line - first, line, read + first - 1, header, index, delim, dec)
         if all(not (row[i].strip() if i < len(row) else "") for i in index.values()):
