@@ -3,7 +3,7 @@
 CSV conventions (all loaders): one header line naming the columns (line 1, or the line after the
 ``skiprows=N`` lines of a data logger's header block, or after Excel's ``sep=;`` line, whose delimiter
 is used; a block not skipped is refused with the line that names the columns), one sample per line, numbers
-in any form Python's ``float`` reads. A Campbell Scientific TOA5 file (LoggerNet's and CardConvert's ASCII
+in any form Python's ``float`` reads but its ``_`` digit groups. A Campbell Scientific TOA5 file (LoggerNet's and CardConvert's ASCII
 format: line 1 starts ``TOA5``, then the column names, their units, the processing codes such as ``Smp`` and
 ``Avg``, then the samples) is read without options, its units row as ``units_row=True`` reads one; its binary
 TOB1/TOB2/TOB3 files are refused, naming how to convert them to TOA5. Files as spreadsheets export them are read: the delimiter
