@@ -3,12 +3,12 @@
 CSV conventions (all loaders): one header line naming the columns (line 1, or the line after the
 ``skiprows=N`` lines of a data logger's header block, or after Excel's ``sep=;`` line, whose delimiter
 is used; a block not skipped is refused with the line that names the columns), one sample per line, numbers
-in any form Python's ``float`` reads but its ``_`` digit groups. A Campbell Scientific TOA5 file (LoggerNet's and CardConvert's ASCII
-format: line 1 starts ``TOA5``, then the column names, their units, the processing codes such as ``Smp`` and
-``Avg``, then the samples) is read without options, its units row as ``units_row=True`` reads one; its binary
-TOB1/TOB2/TOB3 files are refused, naming how to convert them to TOA5. Files as spreadsheets export them are read: the delimiter
-(``,`` ``;`` or tab) and the decimal mark (``.`` or ``,``) are detected from the header and the
-first lines (``delimiter=`` and ``decimal=`` override). The text is UTF-8 (a byte-order mark
+in any form Python's ``float`` reads but its ``_`` digit groups. A Campbell Scientific TOA5 file (LoggerNet's and
+CardConvert's ASCII format: line 1 starts ``TOA5``, then the column names, their units, the processing codes such
+as ``Smp`` and ``Avg``, then the samples) is read without options, its units row as ``units_row=True`` reads
+one; its binary TOB1/TOB2/TOB3 files are refused, naming how to convert them to TOA5. Files as spreadsheets
+export them are read: the delimiter (``,`` ``;`` or tab) and the decimal mark (``.`` or ``,``) are detected from
+the header and the first lines (``delimiter=`` and ``decimal=`` override). The text is UTF-8 (a byte-order mark
 skipped), UTF-16 or UTF-32 when a byte-order mark says so (Excel's "Unicode text"), or what
 ``encoding=`` names (e.g. ``"cp1252"``, Excel's "CSV" on Windows); a binary file (an Excel workbook,
 a compressed CSV) is refused as what it is. A file that allows two readings
@@ -1363,8 +1363,8 @@ def _refuse_serial_dates(p: Path, col: str, t: np.ndarray) -> None:
     a day of the years 1954-2201 (1958-2205) and the mean step a round period as a fraction of a day (1 s is
     1.157e-5), to within what the digits the stamps are written with leave unknown (at least 0.1 %; at most 10 % where
     they increase strictly), where read as seconds the record's period would be 86,400 times too short without a
-    word. Seconds that look so are sampled at
-    86.4 kHz / (1, 2, 5 …), a rate no acquisition uses (100 kHz is 0.864 s of a day: 14 % off; 44.1 kHz 1.96 s: 2 %).
+    word. Seconds that look so are sampled at 86.4 kHz / (1, 2, 5 …), a rate no acquisition uses (100 kHz is 0.864 s
+    of a day: 14 % off; 44.1 kHz 1.96 s: 2 %).
     The mean step, not the median: a General cell shows 11 digits, 1e-6 of a day, so 0.1 s steps print as 1e-6 or
     2e-6 (and are uneven), while their mean keeps the period (to 1e-6 day over the record: 4.5 % of 0.1 s at 20
     samples)."""
