@@ -459,3 +459,17 @@ def test_inputs_as_columns_and_a_list_of_rows_are_read_as_before():
     np.testing.assert_array_equal(two.simulate(rows, y0=[0.0]), two.simulate(np.column_stack([_RUN, 2 * _RUN]),
                                                                               y0=[0.0]))
     assert gb.Record(np.ones((1, 1)), [1.0]).n_inputs == 1  # one sample of one input: no more inputs than samples
+
+
+def test_fewer_samples_than_inputs_is_read_as_samples_where_the_output_or_the_names_settle_it():
+    # the refusal of rows-as-inputs (mend60g) also refused a loader's one-line file of two inputs, u of shape (1, 2)
+    # beside y of one sample (hypothesis in test_loaders): the output's length, or inputs named as many as the
+    # columns, say which reading is meant
+    import graybox as gb
+
+    rec = gb.Record(np.array([[0.5, 2.0]]), np.array([1.0]))
+    assert rec.u.shape == (1, 2)
+    rec = gb.Record(np.array([[0.5, 2.0, 3.0]]), np.array([1.0]), input_names=("a", "b", "c"))
+    assert rec.input_names == ("a", "b", "c")
+    with pytest.raises(ValueError, match="one row per input"):
+        gb.Record(np.array([[0.5, 2.0, 3.0], [1.0, 1.0, 1.0]]), np.array([1.0, 2.0, 3.0]))

@@ -254,7 +254,9 @@ def as_input_array(x: object, name: str, names: Sequence[str] | None = None, *, 
     if a.ndim != 2:
         raise ValueError(f"{name} must be 1-D (one input) or 2-D of shape (N, m) (m inputs), got {a.ndim}-D "
                          f"with shape {a.shape}")
-    if row == "sample" and 0 < a.shape[0] < a.shape[1] and not is_frame(x):
+    settled = ((names is not None and len(names) == a.shape[1])  # the inputs named are the columns
+               or (output is not None and np.size(output) == a.shape[0]))  # the output's samples are the rows
+    if row == "sample" and 0 < a.shape[0] < a.shape[1] and not is_frame(x) and not settled:
         # [u1, u2] (or np.array of it): numpy's rows are samples, so 2 samples of N inputs; the one rule of every
         # entry that takes samples (a free run said N inputs u1 … uN, the regressors 2 samples against N outputs)
         k, n = a.shape
