@@ -390,6 +390,23 @@ def test_too_many_inconsistent_points(rec):
     np.testing.assert_allclose(auto.model.theta, cls(S15, rec, noisy, how="curve").model.theta)
 
 
+def test_auto_passes_through_as_many_points_as_clusters_without_a_sigma_y(rec):
+    # the curve of how="auto" is for points a Σy cluster would pass through only degenerately (Σy = 1); without
+    # one, as many points as clusters are a square system: a FIR model with its gain known at one point was
+    # refused ("StaticCurve.fit: ... needs points at two levels") where how="points" fits it
+    fir = Structure(["u(k-1)", "u(k-2)"])
+    point = StaticPoints([1200.0], [3.0])
+    fit = cls(fir, rec, point)
+    assert fit.constraints == ("static function passes through 1 static points",)
+    # the KKT system of min ‖Ψθ − y‖² s.t. (θ1 + θ2) ū = ȳ, by hand
+    psi, y = stacked_regressors(fir, rec)
+    a = np.array([[1200.0, 1200.0]])
+    kkt = np.block([[psi.T @ psi, a.T], [a, np.zeros((1, 1))]])
+    want = np.linalg.solve(kkt, np.concatenate([psi.T @ y, [3.0]]))[:2]
+    np.testing.assert_allclose(fit.model.theta, want, rtol=1e-8)
+    np.testing.assert_allclose(fit.model.static_curve([1200.0]), [3.0], rtol=1e-10)
+
+
 def test_static_points_outside_the_data_range_are_used_and_named_once(rec):
     # static knowledge where the dynamic data do not reach is what gray-box identification is for
     far = StaticPoints([900.0, 3000.0], [6.0, 60.0])

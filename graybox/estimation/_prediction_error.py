@@ -1176,8 +1176,9 @@ def cls(
         What StaticPoints impose. ``"context"``: nothing by themselves; they are only the points
         that ``constraints`` without points of their own speak of (a band, gain bounds over
         their range). ``"points"``: pass through each. ``"auto"``: pass through each
-        when there are fewer points than the structure has clusters, else (the points cannot all
-        be passed through, save degenerately) as ``"curve"`` for a rational structure.
+        when there are fewer points than the structure has clusters (as many, for a structure without
+        a Σy cluster), else (the points cannot all be passed through, save degenerately with Σy = 1)
+        as ``"curve"`` for a rational structure.
         ``"curve"`` with StaticPoints fits the polynomial the structure's numerator can carry
         (on the powers of ū of its Σ_{u^m} clusters, the others 0) and imposes eq. (22); it needs
         as many points as there are such clusters, at two levels or more. With several inputs it fits a surface on exactly the monomials
@@ -1274,8 +1275,11 @@ def _cls_setup(st: Structure, recs: list[Record], d: _Data, data, static, how: s
         points, static = static, None
     if isinstance(static, StaticPoints) and how == "auto":
         # as many points as clusters or more: the static function cannot pass through them all (at best
-        # degenerately, Σy = 1), so a rational structure takes the curve its numerator carries (eq. (22))
-        how = "curve" if len(static) >= len(cm.keys) and cm.max_y_power <= 1 else "points"
+        # degenerately, Σy = 1: ȳ is Q's Σy column), so a rational structure takes the curve its numerator carries
+        # (eq. (22)). Without a Σy cluster as many points as clusters are a square system a true static function
+        # meets (a FIR model with its gain at one point was sent to a curve fit, which one level refuses)
+        over = len(static) > len(cm.keys) or (len(static) == len(cm.keys) and sigma_y_index(cm) is not None)
+        how = "curve" if over and cm.max_y_power <= 1 else "points"
     if isinstance(static, (StaticCurve, StaticSurface)):
         if how == "points":
             raise ValueError("how='points' needs StaticPoints; sample the curve with curve.points(ubar)")
