@@ -194,6 +194,20 @@ def test_user_constraint_errors(rec):
         cls(S15, rec, None, constraints=[lambda th: th[0] >= 0])
 
 
+def test_user_constraint_with_data_no_theta_meets_is_refused_by_name(rec):
+    # an equality at an infinite value: Clarabel reported 'optimal' and cls returned θ with clusters near 1e19;
+    # a NaN bound: cvxpy's "Problem data contains NaN", naming no constraint
+    y_at_inf = UserConstraint(lambda th: th[0] + th[1] == np.inf, name="Σy at inf")
+    with pytest.raises(ValueError, match=r"Σy at inf: .*infinite"):
+        cls(S15, rec, None, constraints=y_at_inf)
+    nan_bound = UserConstraint(lambda th: [th[0] >= 0.0, th[1] <= np.array(np.nan)], name="a NaN bound")
+    with pytest.raises(ValueError, match=r"a NaN bound: .*NaN"):
+        pe_thetas(S15, rec, PTS, lambdas=[0.5], constraints=nan_bound)
+    # an infinite bound on an inequality says "no bound" and is kept
+    m = cls(S15, rec, None, constraints=UserConstraint(lambda th: th[0] <= np.inf)).model
+    assert np.all(np.isfinite(m.theta))
+
+
 # ---------------------------------------------------------------------------------------------
 # composition and the objects themselves
 # ---------------------------------------------------------------------------------------------

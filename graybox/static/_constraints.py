@@ -1424,6 +1424,26 @@ class ClusterBounds(StaticConstraint):
         return AffineRows.make(n, Ae or None, be or None, Au or None, bu or None)
 
 
+def _non_finite_data(c: cp.Constraint) -> tuple[bool, bool]:
+    """Whether the data of cvxpy constraint ``c`` (its constants and its parameters' values) hold a NaN, and an
+    infinity."""
+    import scipy.sparse
+
+    nan = inf = False
+    for leaf in [*c.constants(), *c.parameters()]:
+        v = leaf.value
+        if v is None:
+            continue
+        v = v.data if scipy.sparse.issparse(v) else v
+        try:
+            a = np.asarray(v, float)
+        except (TypeError, ValueError):
+            continue
+        nan = nan or bool(np.isnan(a).any())
+        inf = inf or bool(np.isinf(a).any())
+    return nan, inf
+
+
 def _cluster_bound_key(k: object) -> str | tuple[int, ...]:
     """A cluster bound's key: a name as it is, a key in :func:`cluster_powers`' forms as the flat (p, m_1, …, m_m)
     the cluster maps index ((1, (1, 0)) is (1, 1, 0))."""
@@ -1492,6 +1512,13 @@ class UserConstraint(StaticConstraint):
                 raise ValueError(f"{self.name}: the function must return cvxpy constraints, got {type(c).__name__}")
             if not c.is_dcp():
                 raise ValueError(f"{self.name}: constraint {c} is not convex (DCP)")
+            nan, inf = _non_finite_data(c)
+            # a NaN reached the solve as cvxpy's "Problem data contains NaN", naming no constraint; an equality at an
+            # infinite value came back from Clarabel as 'optimal', and cls returned θ with clusters near 1e19
+            if nan or (inf and isinstance(c, (cp.constraints.Equality, cp.constraints.Zero))):
+                what = "a NaN" if nan else "an infinite value in an equality, which no finite θ meets"
+                raise ValueError(f"{self.name}: constraint {c} holds {what} (in its constants or its parameters' "
+                                 "values); give finite numbers")
         return out
 
     def constraints(self, theta: cp.Expression, ctx: StaticContext) -> list[cp.Constraint]:
