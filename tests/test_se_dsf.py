@@ -171,3 +171,32 @@ def test_an_unreachable_band_gives_the_best_dynamics_at_the_smallest_static_erro
     assert res.JSF <= np.nanmin(front.JSF) * (1 + 1e-3)  # the smallest static error, to 0.1 %
     near = front.JS[front.JSF <= res.JSF * (1 + 2e-3)]
     assert near.size and res.JS <= 1.05 * near.min()  # and dynamics as good as the sweep's there
+
+
+def test_a_band_within_the_aimed_margin_of_the_least_static_error_still_moves_along_its_valley():
+    # B just above the least J_SF (1e-5 relative): the linearised J_SF aimed at a margin B(1 − 0.05) inside it is
+    # below what any step reaches, and the run stopped at its start ("no feasible step") where steps along the
+    # valley of the least J_SF (the static curve fixed, Σy free) lower J_S
+    from scipy.optimize import minimize_scalar
+
+    rng = np.random.default_rng(0)
+    st_ = gb.Structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "1"])
+    u = np.repeat(rng.uniform(0.5, 2.0, 10), 20)
+    y = np.zeros(200)
+    for k in range(1, 200):
+        y[k] = 0.6 * y[k - 1] + 0.4 * u[k - 1] + 0.1 * u[k - 1] ** 2 + 0.1
+    rec = gb.Record(u, y + 0.1 * rng.standard_normal(200))
+    ub = np.linspace(0.6, 1.8, 6)
+    yb = (0.1 + 0.4 * ub + 0.1 * ub**2) / 0.4 + 0.2 * np.sin(7 * ub)
+    c2, c1, c0 = np.polyfit(ub, yb, 2)  # the static curve of the least J_SF: this quadratic, with any Σy = a < 1
+    least = float(np.mean((np.polyval([c2, c1, c0], ub) - yb) ** 2))
+
+    def on_valley(a):
+        return np.array([a, (1 - a) * c1, (1 - a) * c2, (1 - a) * c0])
+
+    # the least J_S along the valley, by a one-dimensional search
+    best = minimize_scalar(lambda a: gb.js(gb.Model(st_, on_valley(a)), rec), bounds=(0.3, 0.9), method="bounded",
+                           options={"xatol": 1e-7}).fun
+    res = gb.se_dsf(st_, rec, gb.StaticPoints(ub, yb), band=least * (1 + 1e-5), theta0=on_valley(0.5), margin=None)
+    assert res.in_band and res.start_JS > 1.05 * best
+    assert res.JS <= best * (1 + 1e-4)

@@ -360,7 +360,13 @@ def _edge(gn: _GN, th0: np.ndarray, band: float, max_iter: int, tol: float):
             A1, b1, A2, b2 = G
             feasible = g <= band
             if feasible:
-                d, mu = _constrained_step(g, G, min(band * (1.0 - margin), max(g, band * (1.0 - 2 * margin))), nu, mu)
+                aim = min(band * (1.0 - margin), max(g, band * (1.0 - 2 * margin)))
+                d, mu = _constrained_step(g, G, aim, nu, mu)
+                if d is None and aim < g:
+                    # the aim a margin inside the band lies below what the linearised J_SF reaches (a band within
+                    # that margin of J_SF's least value): aim at J_SF as it is (d = 0 meets it), which leaves the
+                    # steps along the valley of its least value. The run stopped at its start ("no feasible step")
+                    d, mu = _constrained_step(g, G, g, nu, mu)
             else:
                 # restoration: the smallest linearised J_S with J_SF at most half of now (or the band),
                 # so that J_S is not given away on the way into the band; where the linearised J_SF
