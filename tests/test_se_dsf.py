@@ -197,6 +197,12 @@ def test_a_band_within_the_aimed_margin_of_the_least_static_error_still_moves_al
     # the least J_S along the valley, by a one-dimensional search
     best = minimize_scalar(lambda a: gb.js(gb.Model(st_, on_valley(a)), rec), bounds=(0.3, 0.9), method="bounded",
                            options={"xatol": 1e-7}).fun
-    res = gb.se_dsf(st_, rec, gb.StaticPoints(ub, yb), band=least * (1 + 1e-5), theta0=on_valley(0.5), margin=None)
+    points = gb.StaticPoints(ub, yb)
+    res = gb.se_dsf(st_, rec, points, band=least * (1 + 1e-5), theta0=on_valley(0.5), margin=None)
     assert res.in_band and res.start_JS > 1.05 * best
     assert res.JS <= best * (1 + 1e-4)
+    # B below the start's J_SF by its round-off (1e-14 relative), which se_dsf counts as in the band (1e-12): the
+    # start was iterated as outside it (J_SF descent only) and returned, in_band=True, with J_S 11 % above the best
+    start = gb.jsf(gb.Model(st_, on_valley(0.5)), points)
+    edge = gb.se_dsf(st_, rec, points, band=start * (1 - 1e-14), theta0=on_valley(0.5), margin=None)
+    assert edge.in_band and edge.JS <= best * (1 + 1e-4)

@@ -106,7 +106,7 @@ class DSFResult(Relocked):
             check_real(self.band, "DSFResult: band", low=0, low_open=True)
         for name in ("JS", "JSF", "start_JS", "start_JSF"):
             check_mean_square(getattr(self, name), f"DSFResult: {name}")
-        if not beyond and self.in_band != bool(self.JSF <= self.band * (1 + 1e-12)):  # as se_dsf judges it
+        if not beyond and self.in_band != bool(self.JSF <= self.band * (1 + _BAND_RTOL)):  # as se_dsf judges it
             raise ValueError(f"DSFResult: in_band is {self.in_band} but JSF = {self.JSF!r} against the band "
                              f"B = {self.band!r}")
         if self.n_iter < 0:
@@ -228,6 +228,9 @@ _MU_RTOL = 1e-4
 
 #: A fall of J_S below this fraction of it is its rounding (a few ulps), not a decrease.
 _ROUNDING = 1e-14
+
+#: J_SF within this fraction above B is in the band (its round-off): one rule for the iteration, the runs and the result.
+_BAND_RTOL = 1e-12
 
 
 def _pe_start(problem: SEProblem, band: float, lambdas: np.ndarray) -> tuple[np.ndarray, str]:
@@ -358,7 +361,9 @@ def _edge(gn: _GN, th0: np.ndarray, band: float, max_iter: int, tol: float):
                 message = "the Jacobian is not finite at the current point"
                 break
             A1, b1, A2, b2 = G
-            feasible = g <= band
+            # in the band as the result is judged (to its round-off): a start above B by 1e-14 relative was iterated as
+            # outside it, by J_SF descent alone, and returned with J_S 11 % above the band's best, said in the band
+            feasible = g <= band * (1 + _BAND_RTOL)
             if feasible:
                 aim = min(band * (1.0 - margin), max(g, band * (1.0 - 2 * margin)))
                 d, mu = _constrained_step(g, G, aim, nu, mu)
@@ -386,7 +391,7 @@ def _edge(gn: _GN, th0: np.ndarray, band: float, max_iter: int, tol: float):
             # counted other steps, stopped for another reason and named another start of the same model)
             lower = f_new < f * (1.0 - _ROUNDING)
             if feasible:
-                ok = np.isfinite(f_new) and g_new <= band * (1 + 1e-12) and lower
+                ok = np.isfinite(f_new) and g_new <= band * (1 + _BAND_RTOL) and lower
                 gain = (f - f_new) / f if ok else 0.0
             else:
                 ok = np.isfinite(f_new) and np.isfinite(g_new) and g_new < g
@@ -397,7 +402,7 @@ def _edge(gn: _GN, th0: np.ndarray, band: float, max_iter: int, tol: float):
                 nu = max(nu / 3.0, 1e-12)
                 margin = max(margin / 1.5, _MARGIN_FLOOR)
                 stall = stall + 1 if gain < tol else 0
-                if not feasible and g <= band:
+                if not feasible and g <= band * (1 + _BAND_RTOL):
                     # restoration reached the band: J_S's stall count starts now (J_SF's small gains said nothing of
                     # it, and its "converged" was said of a run that went on, even when it then ran out of steps)
                     stall = 0
@@ -590,7 +595,7 @@ def _solve_one_thread(problem: SEProblem, *, band, theta0, lambdas, max_iter, to
                             if problem.margin is None else ""))
     # the feasible run with the smallest J_S; else, among the runs within _JSF_TIE of the smallest J_SF
     # reached, the smallest J_S
-    inside = [t for t in runs if t[1][2] <= band * (1 + 1e-12)]
+    inside = [t for t in runs if t[1][2] <= band * (1 + _BAND_RTOL)]
     if not inside:
         g_min = min(t[1][2] for t in runs)
         inside = [t for t in runs if t[1][2] <= g_min * (1 + _JSF_TIE)]
@@ -604,7 +609,7 @@ def _solve_one_thread(problem: SEProblem, *, band, theta0, lambdas, max_iter, to
     # centred problem: the same errors to round-off). Those of raw θ on the records as given carried the offsets'
     # powers: at y + 1e7 (1e9 of y's spreads) J_S came out 2.5e-6 and J_SF 6e-6 off relative, so the result
     # depended on the output's zero well beyond the final model's rounding
-    feasible = bool(g <= band * (1 + 1e-12))
+    feasible = bool(g <= band * (1 + _BAND_RTOL))
     name = "SE D_SF (direct)" if feasible else "SE min J_SF (band infeasible)"
     # the records' input order (not the structure's name order): an input array's columns as the user has them
     model = Model(problem.structure, th, name=name, **carried_from(problem.records, problem.static))
