@@ -229,7 +229,7 @@ _MU_RTOL = 1e-4
 #: A fall of J_S below this fraction of it is its rounding (a few ulps), not a decrease.
 _ROUNDING = 1e-14
 
-#: J_SF within this fraction above B is in the band (its round-off): one rule for the iteration, the runs and the result.
+#: J_SF within this fraction above B is in the band (its round-off), for the iteration, its runs and the result.
 _BAND_RTOL = 1e-12
 
 
