@@ -8,7 +8,7 @@ from hypothesis import HealthCheck, assume, given, settings, strategies as st
 
 from graybox import Candidates, Model, Record, StaticPoints, Structure, reference
 from graybox.estimation import _prediction_error as convex
-from graybox.static._constraints import InfeasibleError, StaticBand
+from graybox.static._constraints import ClusterBounds, InfeasibleError, StaticBand
 from graybox.estimation._prediction_error import cls, pe_pareto, pe_thetas, qr_static_error, static_matrices, static_prediction
 from graybox.static._curves import StaticCurve
 from graybox.core._least_squares import column_scales, scaled_lstsq
@@ -405,6 +405,28 @@ def test_auto_passes_through_as_many_points_as_clusters_without_a_sigma_y(rec):
     want = np.linalg.solve(kkt, np.concatenate([psi.T @ y, [3.0]]))[:2]
     np.testing.assert_allclose(fit.model.theta, want, rtol=1e-8)
     np.testing.assert_allclose(fit.model.static_curve([1200.0]), [3.0], rtol=1e-10)
+
+
+def test_constraints_made_on_the_raw_signals_name_the_offsets_not_the_records():
+    # cluster bounds and cvxpy constraints keep the fit on the signals as given, where at u + 3e3 and y + 2e9 the
+    # regressors are collinear to round-off: cls and pe_thetas refused θ as not identifiable "from the identification
+    # records" and asked for "a record whose input moves", though these records identify it (the fit without the
+    # constraint, on the signals less their means, is made)
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(0.5, 2.0, 21), 20)[:400]
+    y = np.zeros(400)
+    for k in range(2, 400):
+        y[k] = 0.5 * y[k - 1] + 0.1 * y[k - 2] + 0.4 * u[k - 1] + 0.1 * u[k - 1] ** 2 + 0.05 * y[k - 1] * u[k - 1]
+    rec = Record(u + 3e3, y + 0.02 * rng.standard_normal(400) + 2e9)
+    s = Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)^2", "y(k-1)u(k-1)", "1"])
+    assert np.all(np.isfinite(cls(s, rec).model.theta))
+    bound = ClusterBounds({"Σyu": (0.07, None)})
+    for fit in (lambda: cls(s, rec, constraints=bound),
+                lambda: pe_thetas(s, rec, StaticPoints([3000.8, 3001.5], [2e9 + 2.0, 2e9 + 3.5]), lambdas=[0.5],
+                                  constraints=bound)):
+        with pytest.raises(ValueError, match="offsets") as err:
+            fit()
+        assert "input moves" not in str(err.value) and "cluster bounds" in str(err.value)
 
 
 def test_static_points_outside_the_data_range_are_used_and_named_once(rec):

@@ -543,6 +543,33 @@ def centrable(cons: Sequence[StaticConstraint]) -> bool:
     return all(type(c) in _CENTRED_CONSTRAINTS for c in cons)
 
 
+def _offsets_refusal(exc: ValueError, st: Structure, recs: list, cons: Sequence[StaticConstraint],
+                     points: StaticPoints | None, what: str) -> ValueError:
+    """``exc`` (θ refused as not identified by the raw signals' regression) said of its cause where that is the
+    signals' offsets: a closed structure fitted on the signals as given because some constraint is made there only
+    (not :func:`centrable`), whose records less their means (with ``points``, when they carry weight) identify θ.
+    Else ``exc`` itself. At u + 3e3, y + 2e9 a cluster bound was refused as not identifiable "from the identification
+    records", with "give a record whose input moves", where the fit without it was made."""
+    if centrable(cons) or not is_closed(st):
+        return exc
+    try:
+        dc = _data(st, recs, points)
+        if dc.A is None:
+            return exc
+        identified_by(st, dc.R1 * dc.s, dc.N, points=None if points is None else dc.run_points(points),
+                      inputs=recs[0].input_names)
+    except ValueError:
+        return exc
+    raw = [c.describe() for c in cons if type(c) not in _CENTRED_CONSTRAINTS]
+    levels = ", ".join(f"{k} about {v:.3g}" for k, v in dc.offsets.items() if v)
+    return ValueError(
+        f"{what} cannot be fitted with {raw} on these records: those constraints are made on the signals as given, "
+        f"so the fit runs there, not on the signals less their means, and at these offsets ({levels}) the "
+        "regressors are collinear to round-off, though the records less their means identify θ. Subtract the "
+        "offsets from the records (and from the constraints' values), or impose the static information by "
+        "PassesThrough, StaticBand or GainBounds, which are made on the centred signals")
+
+
 def _centred_context(ctx: StaticContext, d: _Data) -> StaticContext:
     """``ctx`` on the centred signals of ``d``: its points shifted, its least-squares θ that of the centred fit."""
     ls = None
@@ -1236,7 +1263,10 @@ def cls(
     rows = _rows(cons, ctx, d)  # validates every constraint before any solver runs
     _warn_static_range(cons, ctx, curve, recs)  # after: bad input is an error, not a warning and an error
     # the records and the equality constraints must identify θ (an input held constant leaves its terms free)
-    identified_by(st, d.R1 * d.s, d.N, equalities=rows.V * d.s, inputs=recs[0].input_names, what="the CLS θ")
+    try:
+        identified_by(st, d.R1 * d.s, d.N, equalities=rows.V * d.s, inputs=recs[0].input_names, what="the CLS θ")
+    except ValueError as exc:
+        raise _offsets_refusal(exc, st, recs, cons, None, "the CLS θ") from None
     if solver == "closed":
         z = _closed_form(d, None, rows, np.ones(1), np.zeros(1))[0]
         if not np.all(np.isfinite(z)):
@@ -1547,18 +1577,19 @@ def pe_thetas(
 
 
 def _unidentified(st: Structure, d: _Data, pts: StaticPoints, rows: _Rows, lam: np.ndarray,
-                  inputs: tuple[str, ...]) -> dict[int, str]:
+                  recs: list, cons: Sequence[StaticConstraint]) -> dict[int, str]:
     """The members whose weights do not identify θ (:func:`identified_by`: at λ1 = 1 the static points carry
     no weight), as {index: reason}."""
     reasons: dict[bool, str] = {}
     for weighted in sorted(set((lam < 1.0).tolist())):
+        what = "θ" if weighted else "θ at λ1 = 1 (no weight on the static points)"
         try:
             # judged in the coordinates of the fit (θ on the centred signals for a centred one, :func:`_data`), the
             # same rank at every offset of the signals
             identified_by(st, d.R1 * d.s, d.N, points=d.run_points(pts) if weighted else None, equalities=rows.V * d.s,
-                          inputs=inputs, what="θ" if weighted else "θ at λ1 = 1 (no weight on the static points)")
+                          inputs=recs[0].input_names, what=what)
         except ValueError as exc:
-            reasons[weighted] = str(exc)
+            reasons[weighted] = str(_offsets_refusal(exc, st, recs, cons, pts if weighted else None, what))
     # at λ1 = 1 the reason names its λ1 already ("θ at λ1 = 1 …")
     return {i: (f"λ1 = {v:g}: " if v < 1.0 else "") + reasons[bool(v < 1.0)] for i, v in enumerate(lam)
             if bool(v < 1.0) in reasons}
@@ -1587,7 +1618,7 @@ def _pe_fit(structure, data, static=None, *, lambdas=None, constraints=None, sol
     _check_solver_options(solver_options, solver)
     st, recs, d, pts, ctx, cons, rows, stat, M = _pe_setup(structure, data, static, constraints, weights, ubar,
                                                             reference, centre=True)
-    failures = _unidentified(st, d, pts, rows, lam, recs[0].input_names)
+    failures = _unidentified(st, d, pts, rows, lam, recs, cons)
     if len(failures) == lam.size:
         raise ValueError(_every_member_failed(failures, lam))
     ok = np.array([i not in failures for i in range(lam.size)])
