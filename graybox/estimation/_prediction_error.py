@@ -21,10 +21,10 @@ normalised to unit norm; θ is reported in engineering units. The dynamic data e
 triangular factor of ``[Ψ/s, y]``, so no solve grows with the record length N. A structure closed under shifts
 (every divisor of every term, as ``centre=True`` returns) is fitted, as ELS and SE fit it, on the signals less their
 means over the records, with the static points shifted alike, and θ mapped back (:func:`_data`), when its constraints
-are made there too (none, PassesThrough, StaticBand, GainBounds: :func:`centrable`; an input held over the records is
-centred on its static points): the fit is then the same model at any zero of y and u (on the raw signals y(k-1)² at
-y + 1e6 carried the offset's round-off, 1e-4, into the fit). With a curve's eq. (22), cluster bounds or a cvxpy
-constraint the fit stays on the raw signals and carries that round-off. The cvxpy problem
+are made there too (none, PassesThrough, StaticBand, GainBounds, ClusterBounds mapped to the centred parameters:
+:func:`centrable`; an input held over the records is centred on its static points): the fit is then the same model at
+any zero of y and u (on the raw signals y(k-1)² at y + 1e6 carried the offset's round-off, 1e-4, into the fit). With a
+curve's eq. (22) or a cvxpy constraint the fit stays on the raw signals and carries that round-off. The cvxpy problem
 goes one step further (:class:`_Basis`): its variable is the step from the least-squares estimate
 in a basis where both quadratic forms are diagonal (a generalised SVD of the two factors), so the
 ill-conditioning of a sweep down to λ1 = 1e-6 lives in a fixed change of variables rather than in
@@ -46,6 +46,7 @@ import scipy.sparse
 
 from ..static._constraints import (
     AffineRows,
+    ClusterBounds,
     CurveEquality,
     GainBounds,
     InfeasibleError,
@@ -534,8 +535,9 @@ class _Rows:
 
 #: The constraints a fit on the centred signals (:func:`_data`) takes, each made on the centred signals: their meaning
 #: is the same there (the static equation at the shifted points, a band's half-width, the denominator D = 1 − ∂/∂ȳ,
-#: the gains on the shifted grid); a problem with any other (a curve's eq. (22), cluster bounds, cvxpy) is fitted raw.
-_CENTRED_CONSTRAINTS = (PassesThrough, StaticBand, GainBounds)
+#: the gains on the shifted grid; cluster bounds mapped exactly, θ = A θ_c + t); a problem with any other (a curve's
+#: eq. (22), cvxpy) is fitted raw.
+_CENTRED_CONSTRAINTS = (PassesThrough, StaticBand, GainBounds, ClusterBounds)
 
 
 def centrable(cons: Sequence[StaticConstraint]) -> bool:
@@ -581,7 +583,12 @@ def _centred_context(ctx: StaticContext, d: _Data) -> StaticContext:
 
 def _centred_affine(c: StaticConstraint, ctx: StaticContext, ctx_c: StaticContext, d: _Data) -> AffineRows:
     """The rows of a :data:`_CENTRED_CONSTRAINTS` constraint on θ_c, made on the centred signals of ``d``
-    (``ctx_c``): with its own points (if any) shifted; gains on their grid (taken on the signals as given) shifted."""
+    (``ctx_c``): with its own points (if any) shifted; gains on their grid (taken on the signals as given) shifted;
+    cluster bounds, which speak of the raw parameters θ = A θ_c + t, mapped (exact: a bound on a cluster that is
+    the same at any zero, Σyu, stays one on θ_c's; fitted raw, at y + 1e9 it moved the fit by the output's spread)."""
+    if isinstance(c, ClusterBounds):
+        r = c.affine(ctx)
+        return AffineRows.make(ctx.n_terms, r.A_eq @ d.A, r.b_eq - r.A_eq @ d.t, r.A_ub @ d.A, r.b_ub - r.A_ub @ d.t)
     if isinstance(c, GainBounds):
         ub, yb = c.grid(ctx)
         names = ctx_c.cluster_map.input_names if np.ndim(ub) > 1 else ()
