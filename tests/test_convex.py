@@ -419,39 +419,27 @@ def _offset_record(du: float, dy: float) -> Record:
 OFFSET_STRUCTURE = Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)^2", "y(k-1)u(k-1)", "1"])
 
 
-def test_constraints_made_on_the_raw_signals_name_the_offsets_not_the_records():
-    # a cvxpy constraint keeps the fit on the signals as given, where at u + 3e3 and y + 2e9 the regressors are
-    # collinear to round-off: cls and pe_thetas refused θ as not identifiable "from the identification records" and
-    # asked for "a record whose input moves", though these records identify it (the fit without the constraint, on
-    # the signals less their means, is made)
+def test_cluster_bounds_and_cvxpy_constraints_are_the_same_at_any_zero_of_the_signals():
+    # fitted on the signals as given, a bound on Σyu (the same cluster at any zero of y and u) moved the one-step
+    # predictions of cls by 2.5 output units (the output's spread is about 3) at y + 1e9, by 4e-3 at y + 1e8, and
+    # was refused as not identifiable ("give a record whose input moves") at u + 3e3, y + 2e9; now made on the signals
+    # less their means, on the raw parameters θ = A θ_c + t (rows mapped exactly, cvxpy expressions of A θ_c + t)
     from graybox.static._constraints import UserConstraint
 
-    rec, s = _offset_record(3e3, 2e9), OFFSET_STRUCTURE
-    assert np.all(np.isfinite(cls(s, rec).model.theta))
-    bound = UserConstraint(lambda th: th[4] >= 0.07, name="Σyu >= 0.07")
-    for fit in (lambda: cls(s, rec, constraints=bound),
-                lambda: pe_thetas(s, rec, StaticPoints([3000.8, 3001.5], [2e9 + 2.0, 2e9 + 3.5]), lambdas=[0.5],
-                                  constraints=bound)):
-        with pytest.raises(ValueError, match="offsets") as err:
-            fit()
-        assert "input moves" not in str(err.value) and "Σyu >= 0.07" in str(err.value)
-
-
-def test_cluster_bounds_are_the_same_at_any_zero_of_the_signals():
-    # fitted on the signals as given, a bound on Σyu (the same cluster at any zero of y and u) moved the one-step
-    # predictions of cls by 2.5 output units (the output's spread is about 3) at y + 1e9, by 5e-3 at y + 1e8, and
-    # was refused at u + 3e3, y + 2e9; now made on the signals less their means, mapped exactly to their parameters
-    s, bound = OFFSET_STRUCTURE, ClusterBounds({"Σyu": (0.07, None)})
+    s = OFFSET_STRUCTURE
     ref = _offset_record(0.0, 0.0)
-    want = stacked_regressors(s, ref)[0] @ cls(s, ref, constraints=bound).model.theta
-    for du, dy in ((0.0, 1e8), (-1e3, 1e7)):
-        rec = _offset_record(du, dy)
-        fit = cls(s, rec, constraints=bound).model
-        assert fit.clusters()["Σyu"] == pytest.approx(0.07, abs=1e-8)
-        got = stacked_regressors(s, rec)[0] @ fit.theta - dy
-        np.testing.assert_allclose(got, want, atol=1e-5 * np.ptp(want))
-    far = cls(s, _offset_record(3e3, 2e9), constraints=bound).model  # was refused as not identifiable
-    assert far.clusters()["Σyu"] == pytest.approx(0.07, abs=1e-8)
+    for bound in (ClusterBounds({"Σyu": (0.07, None)}), UserConstraint(lambda th: th[4] >= 0.07)):
+        want = stacked_regressors(s, ref)[0] @ cls(s, ref, constraints=bound).model.theta
+        for du, dy in ((0.0, 1e8), (-1e3, 1e7)):
+            rec = _offset_record(du, dy)
+            fit = cls(s, rec, constraints=bound).model
+            assert fit.clusters()["Σyu"] == pytest.approx(0.07, abs=1e-8)
+            got = stacked_regressors(s, rec)[0] @ fit.theta - dy
+            np.testing.assert_allclose(got, want, atol=1e-5 * np.ptp(want))
+        far = _offset_record(3e3, 2e9)
+        assert cls(s, far, constraints=bound).model.clusters()["Σyu"] == pytest.approx(0.07, abs=1e-8)
+        th = pe_thetas(s, far, StaticPoints([3000.8, 3001.5], [2e9 + 2.0, 2e9 + 3.5]), lambdas=[0.5], constraints=bound)
+        assert th[0, 4] >= 0.07 - 1e-8
     # a bound on a cluster that moves with the zeros (Σy at u + 3e3 holds Σyu's 3e3 times) is the raw one's
     raw = cls(s, _offset_record(3e3, 0.0), constraints=ClusterBounds({"Σy": (-150.0, None)})).model
     assert raw.clusters()["Σy"] == pytest.approx(-150.0, rel=1e-9)

@@ -21,10 +21,10 @@ normalised to unit norm; θ is reported in engineering units. The dynamic data e
 triangular factor of ``[Ψ/s, y]``, so no solve grows with the record length N. A structure closed under shifts
 (every divisor of every term, as ``centre=True`` returns) is fitted, as ELS and SE fit it, on the signals less their
 means over the records, with the static points shifted alike, and θ mapped back (:func:`_data`), when its constraints
-are made there too (none, PassesThrough, StaticBand, GainBounds, ClusterBounds mapped to the centred parameters:
-:func:`centrable`; an input held over the records is centred on its static points): the fit is then the same model at
-any zero of y and u (on the raw signals y(k-1)² at y + 1e6 carried the offset's round-off, 1e-4, into the fit). With a
-curve's eq. (22) or a cvxpy constraint the fit stays on the raw signals and carries that round-off. The cvxpy problem
+are made there too (none, PassesThrough, StaticBand, GainBounds, ClusterBounds and cvxpy constraints mapped to the
+centred parameters: :func:`centrable`; an input held over the records is centred on its static points): the fit is
+then the same model at any zero of y and u (on the raw signals y(k-1)² at y + 1e6 carried the offset's round-off, 1e-4,
+into the fit). With a curve's eq. (22) the fit stays on the raw signals and carries that round-off. The cvxpy problem
 goes one step further (:class:`_Basis`): its variable is the step from the least-squares estimate
 in a basis where both quadratic forms are diagonal (a generalised SVD of the two factors), so the
 ill-conditioning of a sweep down to λ1 = 1e-6 lives in a fixed change of variables rather than in
@@ -54,6 +54,7 @@ from ..static._constraints import (
     StaticBand,
     StaticConstraint,
     StaticContext,
+    UserConstraint,
     as_constraint_list,
     cluster_powers,
     n_static_inputs,
@@ -535,41 +536,14 @@ class _Rows:
 
 #: The constraints a fit on the centred signals (:func:`_data`) takes, each made on the centred signals: their meaning
 #: is the same there (the static equation at the shifted points, a band's half-width, the denominator D = 1 − ∂/∂ȳ,
-#: the gains on the shifted grid; cluster bounds mapped exactly, θ = A θ_c + t); a problem with any other (a curve's
-#: eq. (22), cvxpy) is fitted raw.
-_CENTRED_CONSTRAINTS = (PassesThrough, StaticBand, GainBounds, ClusterBounds)
+#: the gains on the shifted grid; cluster bounds and cvxpy constraints on θ = A θ_c + t, mapped exactly); a problem
+#: with a curve's eq. (22) is fitted raw.
+_CENTRED_CONSTRAINTS = (PassesThrough, StaticBand, GainBounds, ClusterBounds, UserConstraint)
 
 
 def centrable(cons: Sequence[StaticConstraint]) -> bool:
     """Whether a problem with constraints ``cons`` is fitted on the centred signals when its structure is closed."""
     return all(type(c) in _CENTRED_CONSTRAINTS for c in cons)
-
-
-def _offsets_refusal(exc: ValueError, st: Structure, recs: list, cons: Sequence[StaticConstraint],
-                     points: StaticPoints | None, what: str) -> ValueError:
-    """``exc`` (θ refused as not identified by the raw signals' regression) said of its cause where that is the
-    signals' offsets: a closed structure fitted on the signals as given because some constraint is made there only
-    (not :func:`centrable`), whose records less their means (with ``points``, when they carry weight) identify θ.
-    Else ``exc`` itself. At u + 3e3, y + 2e9 a cluster bound was refused as not identifiable "from the identification
-    records", with "give a record whose input moves", where the fit without it was made."""
-    if centrable(cons) or not is_closed(st):
-        return exc
-    try:
-        dc = _data(st, recs, points)
-        if dc.A is None:
-            return exc
-        identified_by(st, dc.R1 * dc.s, dc.N, points=None if points is None else dc.run_points(points),
-                      inputs=recs[0].input_names)
-    except ValueError:
-        return exc
-    raw = [c.describe() for c in cons if type(c) not in _CENTRED_CONSTRAINTS]
-    levels = ", ".join(f"{k} about {v:.3g}" for k, v in dc.offsets.items() if v)
-    return ValueError(
-        f"{what} cannot be fitted with {raw} on these records: those constraints are made on the signals as given, "
-        f"so the fit runs there, not on the signals less their means, and at these offsets ({levels}) the "
-        "regressors are collinear to round-off, though the records less their means identify θ. Subtract the "
-        "offsets from the records (and from the constraints' values), or impose the static information by "
-        "PassesThrough, StaticBand or GainBounds, which are made on the centred signals")
 
 
 def _centred_context(ctx: StaticContext, d: _Data) -> StaticContext:
@@ -1001,6 +975,8 @@ class _QP:
         self.dy = cp.Variable(k, name="dy")  # y / σ
         # engineering units, for user constraints
         theta = (self.z_p + self.N @ z0) / d.s + cp.multiply(sig / d.s, (self.N @ b.T) @ self.dy)
+        if d.A is not None:  # a fit on the centred signals: user constraints speak of the raw θ = A θ_c + t
+            theta = d.A @ theta + d.t
         self.w1 = cp.Parameter(nonneg=True, name="w1")
         self.w2 = cp.Parameter(nonneg=True, name="w2")
         obj = self.w1 * (_quad(self.dy, b.H1) + 2 * (b.l1 / sig) @ self.dy)
@@ -1270,10 +1246,7 @@ def cls(
     rows = _rows(cons, ctx, d)  # validates every constraint before any solver runs
     _warn_static_range(cons, ctx, curve, recs)  # after: bad input is an error, not a warning and an error
     # the records and the equality constraints must identify θ (an input held constant leaves its terms free)
-    try:
-        identified_by(st, d.R1 * d.s, d.N, equalities=rows.V * d.s, inputs=recs[0].input_names, what="the CLS θ")
-    except ValueError as exc:
-        raise _offsets_refusal(exc, st, recs, cons, None, "the CLS θ") from None
+    identified_by(st, d.R1 * d.s, d.N, equalities=rows.V * d.s, inputs=recs[0].input_names, what="the CLS θ")
     if solver == "closed":
         z = _closed_form(d, None, rows, np.ones(1), np.zeros(1))[0]
         if not np.all(np.isfinite(z)):
@@ -1584,19 +1557,18 @@ def pe_thetas(
 
 
 def _unidentified(st: Structure, d: _Data, pts: StaticPoints, rows: _Rows, lam: np.ndarray,
-                  recs: list, cons: Sequence[StaticConstraint]) -> dict[int, str]:
+                  inputs: tuple[str, ...]) -> dict[int, str]:
     """The members whose weights do not identify θ (:func:`identified_by`: at λ1 = 1 the static points carry
     no weight), as {index: reason}."""
     reasons: dict[bool, str] = {}
     for weighted in sorted(set((lam < 1.0).tolist())):
-        what = "θ" if weighted else "θ at λ1 = 1 (no weight on the static points)"
         try:
             # judged in the coordinates of the fit (θ on the centred signals for a centred one, :func:`_data`), the
             # same rank at every offset of the signals
             identified_by(st, d.R1 * d.s, d.N, points=d.run_points(pts) if weighted else None, equalities=rows.V * d.s,
-                          inputs=recs[0].input_names, what=what)
+                          inputs=inputs, what="θ" if weighted else "θ at λ1 = 1 (no weight on the static points)")
         except ValueError as exc:
-            reasons[weighted] = str(_offsets_refusal(exc, st, recs, cons, pts if weighted else None, what))
+            reasons[weighted] = str(exc)
     # at λ1 = 1 the reason names its λ1 already ("θ at λ1 = 1 …")
     return {i: (f"λ1 = {v:g}: " if v < 1.0 else "") + reasons[bool(v < 1.0)] for i, v in enumerate(lam)
             if bool(v < 1.0) in reasons}
@@ -1625,7 +1597,7 @@ def _pe_fit(structure, data, static=None, *, lambdas=None, constraints=None, sol
     _check_solver_options(solver_options, solver)
     st, recs, d, pts, ctx, cons, rows, stat, M = _pe_setup(structure, data, static, constraints, weights, ubar,
                                                             reference, centre=True)
-    failures = _unidentified(st, d, pts, rows, lam, recs, cons)
+    failures = _unidentified(st, d, pts, rows, lam, recs[0].input_names)
     if len(failures) == lam.size:
         raise ValueError(_every_member_failed(failures, lam))
     ok = np.array([i not in failures for i in range(lam.size)])
