@@ -96,15 +96,15 @@ def test_band_no_structure_reaches_is_an_error_or_an_explicit_fallback(data):
 
 def test_static_points_without_a_band_say_the_search_is_a_black_box(data):
     """Static points with no uncertainty and no band= made a black box with nothing said (hunt60e): a user who gave
-    them meant a gray box. Said before any fit; band=inf (a black box asked for) and points that carry their
-    uncertainty (their own band) say nothing."""
+    them meant a gray box. Said before any fit; band=inf or a black-box estimator (a black box asked for) and points
+    that carry their uncertainty (their own band) say nothing."""
     bare = gb.StaticPoints(data.static.ubar, data.static.ybar)
     plain = gb.Dataset(data.ident, data.valid, bare)
     with pytest.warns(gb.SelectionWarning, match=r"no band \(band=\) and no uncertainty.*black box"), \
             pytest.raises(ValueError, match="exceed"):
         gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), plain, sizes=[40])
     sure = gb.Dataset(data.ident, data.valid, gb.StaticPoints(data.static.ubar, data.static.ybar, uncertainty=0.01))
-    for args in ((plain, dict(band=np.inf)), (sure, {})):
+    for args in ((plain, dict(band=np.inf)), (plain, dict(estimator="ls")), (sure, {})):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", gb.StaticRangeWarning)  # the points' range, said either way
             warnings.simplefilter("error", gb.SelectionWarning)

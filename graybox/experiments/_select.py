@@ -653,7 +653,8 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks,
         splits = tuple((a, b, np.array([L, len(b)])) for a, b in _folds(idents, folds, L + 2))
     if sp is not None and band is None and not black_asked and not (
             isinstance(sp, gb.StaticPoints) and sp.uncertainty is not None):
-        # static points given, yet no band to hold a model to them: a black box would come back unannounced
+        # static points given, yet no band to hold a model to them and no black-box estimator named: a black box
+        # would come back unannounced
         warn("select_graybox: static information was given but no band (band=) and no uncertainty on the points, so "
              "this search is a black box chosen by J_S alone (the static information only scores J_SF); give band=B "
              "(output units²) or StaticPoints(..., uncertainty=δ) for a gray box, or band=numpy.inf to ask for a "
@@ -1516,7 +1517,9 @@ def select_graybox(
     check_choice(rule, "rule", RULES)
     centre = check_bool(centre, "centre")
     ck = checkpoint_of(checkpoint)  # read and checked before the search
-    plan, form = _inputs(candidates, data, sp, validation, test, band, folds, blocks, no_requirement)
+    # band=inf, or black-box estimators named, ask for a black box; only the defaults leave it unannounced
+    plan, form = _inputs(candidates, data, sp, validation, test, band, folds, blocks,
+                         no_requirement or estimator is not None)
     constraints = _constraint_specs(constraints, plan.ident[0].input_names)
     rows = _structures(candidates, plan.ident, sizes, sources, include, form, centre)
     run = functools.partial(_run_jobs, executor=executor, workers=workers, client=client, scheduler=scheduler,
