@@ -507,3 +507,14 @@ def test_a_graybox_file_an_editor_saved_in_another_encoding_is_named_so(tmp_path
     with pytest.raises(gb.GrayboxFileError, match=r"m\.json: not a graybox file: line 1 is not UTF-8 text \(byte "
                                                   r"0xff\)"):
         gb.read_header(path)
+
+
+def test_a_path_under_the_home_folder_written_with_a_tilde(tmp_path, monkeypatch):
+    # gb.save(m, "~/m.json") said "cannot write in the folder ~" (hunt60b): '~' is the home folder, as in a shell
+    import graybox as gb
+
+    monkeypatch.setenv("HOME", str(tmp_path))
+    m = gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0])
+    written = gb.save(m, "~/m.json")
+    assert (tmp_path / "m.json").is_file() and written == tmp_path / "m.json"
+    assert gb.load("~/m.json").theta.tolist() == [0.5, 1.0]

@@ -615,7 +615,8 @@ def check_path(value: object, name: str, *, file: bool = False) -> str | os.Path
     Python's own message for ``Path(2.5)`` names neither the option nor what it wanted. ``file``: a file's name,
     where an empty one is a ``ValueError`` (``Path("")`` is the current folder: "Is a directory: '.'"), and so is one
     ending in a folder separator (``Path("out/")`` is ``out``: a file where the user named a folder). A name holding
-    a NUL character is a ``ValueError`` naming ``name`` (the OS's says only "embedded null byte").
+    a NUL character is a ``ValueError`` naming ``name`` (the OS's says only "embedded null byte"). A leading ``~``
+    is the home folder (``os.path.expanduser``), as a shell, numpy and pandas read it.
     """
     if not isinstance(value, (str, os.PathLike)):
         raise TypeError(f"{name} must be a file or folder name (str or path-like), got {value!r} "
@@ -630,6 +631,9 @@ def check_path(value: object, name: str, *, file: bool = False) -> str | os.Path
         # a folder's name ('results/'): Path drops the separator, and the file was written (or read) as 'results'
         raise ValueError(f"{name} {text!r} ends in a folder separator, so it names a folder, not a file: give a file's "
                          f"name (in that folder: {text}NAME)")
+    if isinstance(text, str) and text.startswith("~"):
+        # '~/m.json' means the home folder, as in a shell, numpy and pandas; open() would look for a folder '~'
+        return os.path.expanduser(text)
     return value
 
 
