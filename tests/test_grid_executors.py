@@ -154,9 +154,9 @@ def _environments_of_two_workers(client) -> dict:
     raise AssertionError(f"two workers never answered: {env}")
 
 
-def test_a_dying_worker_with_two_threads_takes_only_its_own_cell_down(tmp_path, reference):
-    """A user's cluster whose worker runs two threads: while cells are retried only one task runs
-    per worker process, so the cell that kills its worker is the only one failed."""
+@pytest.fixture(scope="module")
+def two_thread_client():
+    """A user's cluster: one worker process of two threads (as `dask worker ADDRESS` runs one of a thread per core)."""
     import dask
     from distributed import Client, LocalCluster
 
@@ -164,15 +164,40 @@ def test_a_dying_worker_with_two_threads_takes_only_its_own_cell_down(tmp_path, 
         cluster = LocalCluster(n_workers=1, threads_per_worker=2, processes=True, dashboard_address=":0",
                                silence_logs=logging.ERROR)
     with cluster, Client(cluster) as client:
-        cells, data = _death_cells(("LS", "PE", "SE"))
-        rows = {r["variant"]: r for r in DaskCluster(client=client, fn=partial(_kill_myself, str(tmp_path))).run(
-            cells, data)}
+        yield client
+
+
+def test_a_dying_worker_with_two_threads_takes_only_its_own_cell_down(tmp_path, reference, two_thread_client):
+    """A user's cluster whose worker runs two threads: the cell that kills its process is the only one failed."""
+    cells, data = _death_cells(("LS", "PE", "SE"))
+    rows = {r["variant"]: r for r in DaskCluster(client=two_thread_client, fn=partial(_kill_myself, str(tmp_path))).run(
+        cells, data)}
     assert set(rows) == {"LS", "PE", "SE"}
     assert rows["LS"]["status"] == "failed" and "died" in rows["LS"]["message"]
     ref = reference.set_index("key")
     for v in ("PE", "SE"):
         assert rows[v]["status"] == "ok", rows[v]["message"]
         assert rows[v]["JS_valid"] == ref.loc[rows[v]["key"], "JS_valid"]
+
+
+def _where(cell, data, threads):
+    """A cell's row and the process that ran it."""
+    return {**run_cell(cell, data, threads=threads), "pid": os.getpid()}
+
+
+def test_cells_on_a_worker_of_two_threads_run_each_in_a_process_of_its_own(reference, two_thread_client):
+    # was: side by side in the worker process, whose warning filters and BLAS thread limits are the process's, not a
+    # thread's: one cell's catch_warnings undid the other's, and a row lost its own warnings or held another cell's
+    # (buck's PE cell without its StaticRangeWarning; an SE cell with one of centred ū that se_pareto silences)
+    (worker,) = two_thread_client.run(os.getpid).values()
+    cells, data = _death_cells(("LS", "PE", "SE"))
+    rows = list(DaskCluster(client=two_thread_client, fn=_where).run(cells, data))
+    pids = {r["pid"] for r in rows}
+    assert worker not in pids and len(pids) <= 2  # a child process of each worker thread, kept for the run's tasks
+    ref = reference.set_index("key")
+    for r in rows:
+        assert r["status"] == "ok" and r["JS_valid"] == ref.loc[r["key"], "JS_valid"]
+        assert tuple(r["warnings"]) == ref.loc[r["key"], "warnings"]
 
 
 SPEC = """\

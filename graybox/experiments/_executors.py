@@ -17,6 +17,9 @@ worker held: the local pool gives a worker one cell at a time; on Dask the drive
 that kills its worker dies alone the second time.
 The ``LocalCluster`` graybox starts reports a worker's death at once (``allowed-failures`` 0); a
 cluster the user brings first retries as its own ``distributed.scheduler.allowed-failures`` says.
+A Dask worker of several threads (``dask worker ADDRESS`` runs one of a thread per core) runs the cells of each
+thread in a child process of its own, as under a cell time limit: a process's warning filters and BLAS thread
+limits are not a thread's, and cells side by side in one process took each other's warnings.
 
 Inside ``with executor.session():`` an executor keeps what it started (the local pool's workers, the Dask
 client and its ``LocalCluster``) from one :meth:`run` to the next while it is alive, and stops it when the
@@ -782,7 +785,9 @@ class DaskCluster:
         after another, and a cell past the limit has that process stopped (and replaced) and is a failed row
         saying so (not retried), as :class:`ProcessPool` does (a second or two more per worker thread: the
         child's start-up).
-        None: cells run in the worker itself, without a limit.
+        None: no limit; cells run in the worker itself, or, on a worker of several threads, in a child process of
+        each of its threads as under a limit (a process's warning filters and BLAS thread limits are its own, not a
+        thread's: cells side by side in one process took each other's warnings).
     """
 
     def __init__(self, client: Any = None, scheduler: str | None = None, workers: int | None = None,
@@ -879,7 +884,7 @@ class DaskCluster:
             plugin = f"graybox-grid-data-{uuid.uuid4().hex[:8]}"
             client.register_plugin(GridData({h: datasets[h] for h in {c.data_hash for c in cells}}), name=plugin)
             tag = uuid.uuid4().hex[:8]
-            runner = None if self.time_limit is None else partial(_cells_in_a_child, self.fn, self.time_limit)
+            runner = partial(_cells_on_a_worker, self.fn, self.time_limit)
             futures: dict = {}
             counter = itertools.count()
             if batches is None:
@@ -978,7 +983,7 @@ class _KeptPool:
     and the data sets it was sent reused: starting one per task cost 2 s a task); closed at the run's end, or
     once idle for ``KEPT_IDLE`` s (a run whose driver died never ends on the worker)."""
 
-    def __init__(self, fn: CellFn, time_limit: float):
+    def __init__(self, fn: CellFn, time_limit: float | None):
         self.pool = ProcessPool(1, fn, time_limit=time_limit, threads=1, process="child process")
         self._stack = ExitStack()
         self._stack.enter_context(self.pool.session())
@@ -1021,11 +1026,27 @@ class _KeptPool:
             self._stack.close()
 
 
-def _cells_in_a_child(fn: CellFn, time_limit: float, cells: Sequence[Cell], datasets: Mapping[str, gb.Dataset],
-                      kept: dict) -> list[dict]:
+def _cells_on_a_worker(fn: CellFn, time_limit: float | None, cells: Sequence[Cell],
+                       datasets: Mapping[str, gb.Dataset], kept: dict) -> list[dict]:
+    """A Dask task's ``cells``, their rows in order: in the worker itself when it runs one thread and they have no
+    time limit, else in a child process of the worker thread (:func:`_cells_in_a_child`). A process's warning
+    filters and BLAS thread limits are the process's, not a thread's: two cells side by side in one worker undid
+    each other's ``catch_warnings`` and thread limits (a row lost its own warnings, or held another cell's, or one
+    se_pareto silences)."""
+    from distributed import get_worker
+
+    worker = get_worker()
+    threads = getattr(getattr(worker, "state", worker), "nthreads", 1)
+    if time_limit is None and threads == 1:
+        return [fn(c, datasets[c.data_hash], threads=1) for c in cells]
+    return _cells_in_a_child(fn, time_limit, cells, datasets, kept)
+
+
+def _cells_in_a_child(fn: CellFn, time_limit: float | None, cells: Sequence[Cell],
+                      datasets: Mapping[str, gb.Dataset], kept: dict) -> list[dict]:
     """On a Dask worker: ``cells`` one after another in a child process, each stopped past ``time_limit`` s
-    (a failed row saying so); their rows in the cells' order. The child is kept in ``kept`` (the run's, on this
-    worker) for the next task of the same worker thread."""
+    (a failed row saying so; None: no limit); their rows in the cells' order. The child is kept in ``kept`` (the
+    run's, on this worker) for the next task of the same worker thread."""
     key = ("cells in a child", threading.get_ident())
     got = None
     while got is None:
