@@ -171,15 +171,20 @@ def test_a_store_of_a_newer_graybox_is_refused(base_store, tmp_path):
     assert len(gx.load_results(newer_cells)) == 4  # still readable
 
 
-def _first_format(src: Path, dst: Path, g: gx.Grid) -> None:
-    """The store a graybox of the first store format wrote for grid ``g``: meta and cells only."""
+def _first_format(src: Path, dst: Path, g: gx.Grid, version: str | None = None) -> None:
+    """The store a graybox of the first store format wrote for grid ``g``: meta and cells only (``version``: a
+    graybox other than this one wrote it, its cells keyed by that version)."""
     rows = sqlite3.connect(src).execute(f"SELECT {', '.join(COLUMNS)} FROM cells").fetchall()
     con = sqlite3.connect(dst)
     con.execute("CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL)")
     con.execute(f"CREATE TABLE cells ({', '.join(f'{k} {t}' for k, t in COLUMNS.items())})")
     cells = g.cells()
-    meta = {"format": "graybox-grid-store", "format_version": "1", "grid_fingerprint": g.fingerprint(cells),
-            "grid_name": g.name, "grid_spec": json.dumps(g.to_dict()), "graybox_version": gb.__version__,
+    fingerprint = g.fingerprint(cells)
+    if version is not None:  # its cells' keys, and so the grid's fingerprint, are that version's
+        rows = [(f"{version}-{r[0]}", *r[1:-4], version, *r[-3:]) for r in rows]
+        fingerprint = f"{version}-{fingerprint}"
+    meta = {"format": "graybox-grid-store", "format_version": "1", "grid_fingerprint": fingerprint,
+            "grid_name": g.name, "grid_spec": json.dumps(g.to_dict()), "graybox_version": version or gb.__version__,
             "n_cells": str(len(cells)), "created": "2026-01-01T00:00:00+00:00"}
     con.executemany("INSERT INTO meta VALUES (?, ?)", list(meta.items()))
     con.executemany(f"INSERT INTO cells VALUES ({', '.join('?' * len(COLUMNS))})", rows)
@@ -202,6 +207,21 @@ def test_a_first_format_store_is_read_upgraded_by_its_own_spec_and_then_grows(ba
     run = gx.run_grid(grid((LS, CLS, PE)), old)
     assert (run.ran, run.skipped, run.spec) == (2, 4, 2) and calls["pe_pareto"] == 2
     assert list(gx.store_specs(old)["created"])[0] == "2026-01-01T00:00:00+00:00"
+
+
+def test_a_first_format_store_of_another_graybox_is_not_sent_to_its_own_spec(base_store, tmp_path):
+    # was: "... this is another grid. Run the store's own spec on it first": its own spec was refused alike, for ever
+    old = tmp_path / "v1.sqlite"
+    _first_format(base_store, old, grid(), version="0.1.0")
+    before = old.read_bytes()
+    for g in (grid(), grid((LS, CLS, PE))):  # its own grid, and another
+        with pytest.raises(gx.StoreError) as err:
+            gx.run_grid(g, old)
+        text = str(err.value)
+        assert "written by graybox 0.1.0" in text and "another --store path" in text and "nothing was written" in text
+        assert "own spec" not in text and "another grid" not in text
+    assert old.read_bytes() == before
+    assert len(gx.load_results(old)) == 4  # read as it is
 
 
 # --------------------------------------------------------------------------------------------

@@ -488,16 +488,21 @@ class ResultStore:
                 if meta["format_version"] == "1":
                     if meta.get("grid_fingerprint") != fingerprint:
                         n = ro.execute("SELECT COUNT(*) FROM cells").fetchone()[0]
-                        why = ""
+                        head = (f"{p} is a store of the first format (graybox {meta.get('graybox_version')}), which "
+                                f"holds one grid ({meta.get('grid_name')!r}, {n} cell(s))")
                         if meta.get("graybox_version") != version:
-                            why = (f"; it was written by graybox {meta.get('graybox_version')}, this is {version}, "
-                                   "and cells are keyed by version, so none of them would be reused anyway")
+                            # its own spec, run by this graybox, has other keys (cells are keyed by version), so
+                            # another fingerprint: it is refused as any other grid, and "run its own spec" never held
+                            raise StoreError(
+                                f"{head}; it was written by graybox {meta.get('graybox_version')}, this is {version}: "
+                                "cells are keyed by version, so this graybox can neither resume nor grow it (its "
+                                "grid's cells, run by this graybox, are new ones). It can be read (load_results, "
+                                "graybox grid report); run the spec into another --store path; nothing was written "
+                                "to it")
                         raise StoreError(
-                            f"{p} is a store of the first format (graybox {meta.get('graybox_version')}), which holds "
-                            f"one grid ({meta.get('grid_name')!r}, {n} cell(s)){why}. It can be read (load_results, "
-                            "graybox grid report) and resumed by its own spec, which upgrades it so that it can "
-                            "grow; this is another grid. Run the store's own spec on it first, or choose another "
-                            "--store path; nothing was written to it")
+                            f"{head}. It can be read (load_results, graybox grid report) and resumed by its own spec, "
+                            "which upgrades it so that it can grow; this is another grid. Run the store's own spec on "
+                            "it first, or choose another --store path; nothing was written to it")
                     migrate = True
                 else:
                     specs = _specs(ro, meta, p, reading=False)
