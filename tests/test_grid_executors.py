@@ -117,6 +117,34 @@ def test_a_dying_worker_gets_its_cell_retried_once_processes(tmp_path, reference
     _check_deaths(rows, cells, tmp_path, reference)
 
 
+def _dead(pid: int) -> bool:
+    """Whether process ``pid`` has exited (a zombie its parent has not reaped yet counts: its pipes are closed)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] == "Z"
+    except OSError:
+        return True
+
+
+def test_a_pool_worker_killed_between_two_cells_is_replaced_and_the_run_goes_on(reference):
+    # was: the next cell, sent to the dead worker, raised BrokenPipeError, which ended the run (a worker killed while
+    # its row was being written: the OOM killer, a kill by pid); on Dask under a time limit, a failed batch
+    cells, data = _death_cells(("LS", "CLS", "PE"))
+    rows = ProcessPool(1).run(cells, data)
+    first = next(rows)  # its worker is idle now: the next cell is sent once the row is taken
+    pid = int(first["worker"].rsplit(":", 1)[1])
+    os.kill(pid, signal.SIGKILL)
+    deadline = time.monotonic() + 30
+    while not _dead(pid):
+        assert time.monotonic() < deadline, "the worker outlived SIGKILL"
+        time.sleep(0.01)
+    done = [first, *rows]
+    assert sorted(r["variant"] for r in done) == ["CLS", "LS", "PE"]
+    ref = reference.set_index("key")
+    for r in done:
+        assert r["status"] == "ok" and r["JS_valid"] == ref.loc[r["key"], "JS_valid"]
+    assert all(r["worker"] != first["worker"] for r in done[1:])  # on the worker started in its place
+
+
 def test_a_dying_worker_gets_its_cell_retried_once_dask_and_a_scheduler_address(tmp_path, reference, monkeypatch):
     from distributed import Client
 

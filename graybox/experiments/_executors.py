@@ -381,6 +381,17 @@ class ProcessPool:
             slot.proc.join(timeout=5)
         slot.conn.close()
 
+    @staticmethod
+    def _send(slot: _Slot, cell: Cell, datasets: Mapping[str, gb.Dataset]) -> bool:
+        """Send ``cell`` (and its data set, the first time) to the slot's worker; False if its worker is gone."""
+        h = cell.data_hash
+        try:
+            slot.conn.send((cell, None if h in slot.sent else datasets[h]))
+        except OSError:  # BrokenPipeError, ConnectionResetError: the worker's end of the pipe is closed
+            return False
+        slot.sent.add(h)
+        return True
+
     def _wait(self, busy: Sequence[_Slot]) -> float | None:
         """How long to wait for a row at most (seconds): until the first busy cell's time limit, if any, and an
         hour at most (the loop waits again): a wait of more than 2^31 ms is an OverflowError in poll()."""
@@ -416,11 +427,16 @@ class ProcessPool:
                 for s in free:
                     if not queued:
                         break
-                    s.cell, s.attempt = queued.popleft()
-                    h = s.cell.data_hash
-                    s.conn.send((s.cell, None if h in s.sent else datasets[h]))
-                    s.sent.add(h)
-                    s.started = None
+                    cell, attempt = queued.popleft()
+                    if not self._send(s, cell, datasets):
+                        # the worker died idle (killed between two cells, its row being written): no death of this
+                        # cell's, which goes to a worker started in its place (should that one be dead already, its
+                        # death is seen below, as one while running the cell)
+                        i = slots.index(s)
+                        self._stop(s, graceful=False)
+                        slots[i] = s = self._start()
+                        self._send(s, cell, datasets)
+                    s.cell, s.attempt, s.started = cell, attempt, None
                 busy = [s for s in slots if s.cell is not None]
                 if not busy:  # nothing in flight, none taken, none left to take
                     break
