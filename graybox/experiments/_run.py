@@ -164,7 +164,10 @@ def run_grid(
     -----
     A row is committed as soon as the driver receives it. On Dask, cells travel in batches (at
     most about three seconds of work each, smaller towards the end, two per worker thread in
-    flight), so a killed driver loses at most the batches in flight. Worker processes are
+    flight), so a killed driver loses at most the batches in flight. A Dask worker of several threads (``dask
+    worker``'s default) runs each thread's cells in a child process of its own, kept for the run: a process's
+    warning filters are not a thread's, and cells side by side in one process took each other's warnings (a
+    row's ``warnings``). Worker processes are
     started with the ``spawn`` method (the local pool and a Dask ``LocalCluster``), which imports
     the calling script again: a script that runs a grid on workers must do so under
     ``if __name__ == "__main__":``. Notebooks and the ``graybox``
