@@ -476,16 +476,35 @@ def test_the_cell_and_decide_dsf_share_one_no_member_in_band_rule():
     assert row["status"] == "infeasible" and row["message"] == str(err.value)
 
 
-def test_cells_of_another_graybox_version_are_not_reused_and_the_run_says_why(base_store, tmp_path):
-    path, _ = _edited(base_store, tmp_path, "old.sqlite", "UPDATE cells SET version = '0.0.1'")
-    con = sqlite3.connect(path)  # the cells of an older graybox have other keys: theirs, not this version's
-    con.execute("UPDATE cells SET key = 'old-' || key")
+def _older(store: Path, tmp_path: Path) -> Path:
+    """A copy of ``store`` as an older graybox (0.0.1) wrote it: its cells under the keys that version gave them."""
+    path, _ = _edited(store, tmp_path, "old.sqlite", "UPDATE cells SET version = '0.0.1'")
+    con = sqlite3.connect(path)
+    for table in ("cells", "spec_cells"):
+        con.execute(f"UPDATE {table} SET key = 'old-' || key")
     con.commit()
     con.close()
+    return path
+
+
+def test_cells_of_another_graybox_version_are_not_reused_and_the_run_says_why(base_store, tmp_path):
+    path = _older(base_store, tmp_path)
     run = gx.run_grid(grid(), path)
     assert (run.ran, run.skipped) == (4, 0)
-    assert any("none of the store's 4 cells is reused: they were made by graybox 0.0.1" in n for n in run.notes)
+    assert any("4 cell(s) of this grid were made before by graybox 0.0.1" in n for n in run.notes)
     assert len(gx.load_results(path, spec="all")) == 8 and len(gx.load_results(path)) == 4
+
+
+def test_only_the_cells_an_older_graybox_made_alike_are_said_to_run_again_for_the_version(base_store, tmp_path):
+    # was: "none of the store's N cells is reused: they were made by graybox 0.0.1" whenever the grid reused none,
+    # counting every cell of the store, this version's too, and said of a grid whose cells no version had made
+    path = _older(base_store, tmp_path)
+    run = gx.run_grid(grid((LS, PE), structures=(FIRST,)), path)  # LS on FIRST made by 0.0.1, PE new
+    assert run.ran == 2
+    assert any("1 cell(s) of this grid were made before by graybox 0.0.1" in n for n in run.notes), run.notes
+    third = gx.StructureSpec("third", terms=["y(k-1)", "y(k-2)", "u(k-1)", "1"])
+    run = gx.run_grid(grid((PE,), structures=(third,)), path)  # nothing of it made before, by any version
+    assert run.ran == 1 and not any("0.0.1" in n for n in run.notes), run.notes
 
 
 def test_compare_results_wants_a_sequence_of_paths():

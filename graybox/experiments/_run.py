@@ -362,9 +362,8 @@ def _notes(st: ResultStore, cells, done: Mapping[str, str], version: str) -> lis
             same = [k for k, v in st.known_data.items() if v == h]
             out.append(f"data set {name!r} is new to the store" + (f" (the same data as {same[0]!r}: its cells are "
                                                                    "reused)" if same else ""))
-    if done and not any(c.key in done for c in cells):
-        others = sorted(st.versions() - {version})
-        if others:
-            out.append(f"none of the store's {len(done)} cells is reused: they were made by graybox "
-                       f"{', '.join(others)}, and cells are keyed by version")
+    # the cells of this grid an older (or other) graybox made: keyed by version, they run again
+    for v, n in sorted(st.made_by_other_versions([c for c in cells if c.key not in done], version).items()):
+        out.append(f"{n} cell(s) of this grid were made before by graybox {v}, and cells are keyed by version: "
+                   "they run again (the old rows are kept)")
     return out

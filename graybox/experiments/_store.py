@@ -688,9 +688,20 @@ class ResultStore:
         self._conn.execute("COMMIT")
         return cur.rowcount == 1
 
-    def versions(self) -> set[str]:
-        """The graybox versions that made the store's cells."""
-        return {v for (v,) in self._conn.execute("SELECT DISTINCT version FROM cells")}
+    def made_by_other_versions(self, cells: Sequence[Cell], version: str) -> dict[str, int]:
+        """How many of ``cells`` (each key once) the store holds as another graybox version made them (the same data,
+        structure, variant and seed under that version's key), by version: cells are keyed by version, so those
+        run again."""
+        made: dict[tuple, set[str]] = {}
+        for dh, sh, vh, seed, v in self._conn.execute(
+                "SELECT DISTINCT s.data_hash, s.structure_hash, s.variant_hash, s.seed, c.version FROM spec_cells s "
+                "JOIN cells c ON c.key = s.key WHERE c.version != ?", (version,)):
+            made.setdefault((dh, sh, vh, seed), set()).add(v)
+        out: dict[str, int] = {}
+        for c in {c.key: c for c in cells}.values():
+            for v in made.get((c.data_hash, _hash(c.structure_spec), _hash(c.variant_spec), c.seed), ()):
+                out[v] = out.get(v, 0) + 1
+        return out
 
     def counts(self) -> dict[str, int]:
         """The registered spec's cells by status (a cell two data set names of the same data share counts for each)."""
