@@ -64,7 +64,7 @@ def test_a_decay_without_a_turn_is_read_where_it_dies_out():
 def test_no_advice_for_a_drift():
     rec = gb.Record(np.zeros(2000), np.arange(2000.0) ** 1.5, name="drift")
     a = gb.decimation_advice(rec)
-    assert a.q is None and a.Ts_new is None and "no autocorrelation minimum" in a.reason
+    assert a.q is None and a.Ts_new is None and "no autocorrelation minimum below its 95 % band" in a.reason
     assert "q=None" in repr(a)
 
 

@@ -196,7 +196,8 @@ def decimation_advice(data: Record | Dataset | Sequence[Record]) -> DecimationAd
     Ts = recs[0].Ts
     if not found:
         return DecimationAdvice(None, None, None, None, None, Ts,
-                                "no autocorrelation minimum, and no decay to zero, within a quarter of the record: its "
+                                "no autocorrelation minimum below its 95 % band, and no decay into that band, within a "
+                                "quarter of the record (a minimum inside the band is noise, not a time scale): its "
                                 "slowest motion does not turn within it (a drift, or a record too short for its "
                                 "dynamics)")
     tau_m = min(found)
