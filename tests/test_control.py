@@ -385,6 +385,9 @@ def test_plots_of_local_models():
     oc = gb.operating_curve(reference.paper_model(15), np.linspace(800, 1600, 3), Ts=0.05)
     fig = plots.plot_local_models(oc)
     assert len(fig.axes) == 3 and len(fig.axes[0].lines) == 3
+    # the legend's operating points in the input's unit where the model says it (hunt60e: "ū = 20", no unit)
+    rpm = gb.operating_curve(gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0], units=("rpm", "mlc")), [800.0], Ts=0.05)
+    assert [t.get_label() for t in plots.plot_local_models(rpm).axes[0].lines] == ["ū = 800 rpm"]
     fig2 = plots.plot_operating_curve(oc, reference=([800.0, 1600.0], [0.5, 0.3]))
     assert len(fig2.axes) == 3 and len(fig2.axes[1].lines) == 2
 

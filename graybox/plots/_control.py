@@ -105,7 +105,7 @@ def plot_local_models(
             raise ValueError(f"duration={duration:g} s is {n} samples of a model sampled every {m.Ts:g} s: at most "
                              f"{100 * MAX_STEP_SAMPLES} are drawn; give a shorter duration")
         w = np.logspace(np.log10(np.pi / m.Ts) - 3, np.log10(np.pi / m.Ts), n_frequencies)
-        tag = f"ū = {at[id(m)]}" + ("" if m.reached else f" ({m.status})")
+        tag = f"ū = {at[id(m)]}{' ' + m.units[0] if m.units[0] else ''}" + ("" if m.reached else f" ({m.status})")
         line, = ax_s.plot(np.arange(n) * m.Ts, m.step(n, input), lw=1.2, color=colour, label=tag)
         G = m.frequency_response(w, input)
         ax_m.loglog(w, np.abs(G), color=line.get_color(), lw=1.0)
