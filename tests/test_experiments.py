@@ -16,6 +16,7 @@ import pytest
 from matplotlib.figure import Figure
 
 import graybox as gb
+from _reports import undrawn_figures
 from graybox import experiments as gx
 from graybox._cli import main
 from graybox.experiments._spec import data_fingerprint
@@ -521,6 +522,7 @@ def test_cli_init_run_report(tmp_path, capsys, monkeypatch):
     out = capsys.readouterr().out
     assert "14 cells, 12 reused, 2 run now" in out and "a new spec for this store (spec 2)" in out
     spec.write_text(TOML)
+    undrawn_figures(monkeypatch)  # its leaderboard.csv is read; test_figures_and_report_files draws such a report
     assert main(["grid", "report", "r.sqlite", "--out", "rep"]) == 0
     assert (tmp_path / "rep" / "leaderboard.csv").is_file()
     (tmp_path / "notes.txt").write_text("not a store")

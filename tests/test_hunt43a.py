@@ -10,6 +10,7 @@ import pandas.testing as pd_testing
 import pytest
 
 import graybox as gb
+from _reports import undrawn_figures
 
 
 def _named_points(text: str) -> list[str]:
@@ -118,13 +119,14 @@ def test_grid_status_ranks_each_data_set_by_its_own_rule_and_says_which(two_data
     assert "dsf_valid" in text and "rule chosen: each cell's own choice, for a data set without a band" in text
 
 
-def test_grid_report_takes_a_band_per_data_set(two_data, tmp_path, capsys):
+def test_grid_report_takes_a_band_per_data_set(two_data, tmp_path, capsys, monkeypatch):
     """graybox grid report of a store whose one data set has no band could only be made with --band B for every data
     set (pumping's stored band overridden by the other's number, in the other's units) or --rule chosen: --band
     NAME=B (repeatable) gives the data sets their own, the others keep theirs."""
     from graybox._cli import main
 
     path, b = two_data
+    undrawn_figures(monkeypatch)  # the leaderboards are read; band_report draws this store's figures with this band
     assert main(["grid", "report", str(path), "--out", str(tmp_path / "r"), "--band", "bare=0.05"]) == 0
     lb = pd.read_csv(tmp_path / "r" / "leaderboard.csv", index_col=[0, 1, 2])
     want = gx.leaderboard(path, band={"bare": 0.05})
@@ -143,7 +145,7 @@ def test_grid_report_takes_a_band_per_data_set(two_data, tmp_path, capsys):
         assert said in capsys.readouterr().err
 
 
-def test_a_report_rewritten_in_its_folder_leaves_no_file_of_the_last_one(band_report, tmp_path):
+def test_a_report_rewritten_in_its_folder_leaves_no_file_of_the_last_one(band_report, tmp_path, monkeypatch):
     """A report written again into its folder overwrote the files it wrote and kept the others: the figures of a data
     set the new report does not hold, and a report.html (of the old leaderboard) when the new one was written without
     html, sat beside the new tables as if they were of them. A file the reports did not write stays."""
@@ -156,6 +158,7 @@ def test_a_report_rewritten_in_its_folder_leaves_no_file_of_the_last_one(band_re
     first = [out / p.relative_to(src) for p in written]
     assert (out / "heatmap_bare.png") in first and (out / "report.html") in first
     (out / "notes.txt").write_text("mine")
+    undrawn_figures(monkeypatch)  # the files' names are what is asserted
     second = gx.write_report(small, out)
     held = sorted(p.name for p in out.iterdir() if not p.name.startswith("."))
     assert held == sorted([p.name for p in second] + ["notes.txt"])
@@ -475,7 +478,7 @@ def test_the_heat_map_tells_a_pair_never_run_from_one_with_no_qualifying_model(t
     assert texts[(rows.index("so"), cols.index("LS"))] == "—"  # run: no model in the band
 
 
-def test_the_summary_says_which_band_ranked_each_data_set(two_data, band_report, tmp_path):
+def test_the_summary_says_which_band_ranked_each_data_set(two_data, band_report, tmp_path, monkeypatch):
     """summary.txt (and report.html) said 'ranking rule: dsf_valid' and '<data>: best by J_S on the validation
     record', never within which band: a report made with --band, or of a data set whose band the spec gave, ranked by
     a B the reader could find only in the reasons of rows that missed it."""
@@ -483,6 +486,7 @@ def test_the_summary_says_which_band_ranked_each_data_set(two_data, band_report,
     text = (band_report[0] / "summary.txt").read_text()  # write_report(path, ..., band={"bare": 0.05}, html=True)
     assert f"pumping: best by J_S on the validation record among the models with J_SF ≤ B = {b:g}" in text
     assert "bare: best by J_S on the validation record among the models with J_SF ≤ B = 0.05" in text
+    undrawn_figures(monkeypatch)  # its summary.txt is read
     gx.write_report(path, tmp_path / "c", rule="chosen")
     assert "bare: best by J_S on the validation record (each cell's own choice)" in \
         (tmp_path / "c" / "summary.txt").read_text()

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import graybox as gb
+from _reports import undrawn_figures
 import graybox.experiments as gx
 
 _MISO = '''name = "miso"
@@ -83,7 +84,7 @@ def test_a_report_says_the_units_of_its_mean_squares(tmp_path):
     assert gx.plot_scatter(df).axes[0].get_ylabel() == f"J_SF ({unit})"
 
 
-def test_data_without_units_keep_bare_labels(tmp_path):
+def test_data_without_units_keep_bare_labels(tmp_path, monkeypatch):
     ds = gb.load_pumping()
     bare = gb.Dataset(*(r.__class__(r.u, r.y, r.Ts, r.name) for r in (ds.ident, ds.valid)), ds.static)
     g = gx.Grid.from_toml_text(_PUMPING)
@@ -91,6 +92,7 @@ def test_data_without_units_keep_bare_labels(tmp_path):
     gx.run_grid(g, tmp_path / "r.sqlite")
     df = gb.load_results(tmp_path / "r.sqlite")
     assert gx.plot_fronts(df, data="pumping").axes[0].get_ylabel() == "J_SF"
+    undrawn_figures(monkeypatch)  # its summary.txt is read
     written = {p.name: p for p in gx.write_report(tmp_path / "r.sqlite", tmp_path / "rep")}
     assert "²" not in written["summary.txt"].read_text(encoding="utf-8")
 
@@ -119,11 +121,12 @@ def test_a_least_squares_cell_on_a_held_input_does_not_call_itself_els():
         gb.els(gb.Structure(["y(k-1)", "u(k-1)", "1"]), rec, noise=1)
 
 
-def test_two_stores_side_by_side_say_each_band_in_its_unit(tmp_path):
+def test_two_stores_side_by_side_say_each_band_in_its_unit(tmp_path, monkeypatch):
     gx.run_grid(gx.Grid.from_toml_text(_PUMPING), tmp_path / "a.sqlite")
     gx.run_grid(gx.Grid.from_toml_text(_PUMPING.replace('bundled = "pumping"', 'bundled = "pumping"\nband = 0.05')),
                 tmp_path / "b.sqlite")
     unit = gb.load_pumping().valid.units[1] + "²"
+    undrawn_figures(monkeypatch)  # its summary.txt is read; plot_fronts' suptitle below is built as the report's
     written = {p.name: p for p in gx.write_report([tmp_path / "a.sqlite", tmp_path / "b.sqlite"], tmp_path / "rep")}
     text = written["summary.txt"].read_text(encoding="utf-8")
     assert f"{0.175 ** 2:g} {unit} for a: PE band; 0.05 {unit} for b: PE band" in text

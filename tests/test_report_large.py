@@ -5,6 +5,7 @@ import pytest
 import graybox as gb
 from graybox import experiments as gx
 from graybox.experiments import _report
+from _reports import undrawn_figures
 
 TERMS = ["y(k-2)", "u(k-2)", "u(k-1)^2", "u(k-1)y(k-1)", "y(k-3)"]
 
@@ -37,7 +38,8 @@ def test_the_figures_draw_the_best_structures_by_rank_and_say_so(store, tmp_path
     assert _report._best_structures(gx.leaderboard(store, rule="chosen"), "pumping", 5) == (None, 5)
 
 
-def test_every_structure_is_drawn_when_asked(store, tmp_path):
+def test_every_structure_is_drawn_when_asked(store, tmp_path, monkeypatch):
+    undrawn_figures(monkeypatch)  # its summary.txt is read; plot_heatmap's figure below is the one checked
     gx.write_report(store, tmp_path, rule="chosen", max_structures=None)
     assert "best of" not in (tmp_path / "summary.txt").read_text()
     fig = gx.plot_heatmap(store, rule="chosen")
@@ -55,9 +57,11 @@ def test_plot_heatmap_names_an_unknown_structure(store):
         gx.plot_heatmap(store, rule="chosen", structures=["s0", "s9"])
 
 
-def test_the_cli_takes_max_structures(store, tmp_path, capsys):
+def test_the_cli_takes_max_structures(store, tmp_path, capsys, monkeypatch):
     # the command's main in this process (two `python -m graybox` runs cost 2 s of imports; test_cli_help runs it so)
     from graybox._cli import main
+
+    undrawn_figures(monkeypatch)  # its summary.txt is read; the first test here draws a report of this store
 
     argv = ["grid", "report", str(store), "--out", str(tmp_path), "--rule", "chosen", "--max-structures", "3"]
     assert main(argv) == 0
