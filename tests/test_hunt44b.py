@@ -18,6 +18,7 @@ import pytest
 
 from graybox import experiments as gx
 from graybox._cli import main
+from _reports import undrawn_figures
 
 ONE = gx.StructureSpec("first-order", terms=["y(k-1)", "u(k-1)", "1"])
 LS = gx.Variant("LS", "ls")
@@ -62,7 +63,7 @@ def read_only(path: Path):
         subprocess.run([chattr, "-i", str(path)], check=True)
 
 
-def test_a_store_in_a_read_only_folder_is_read_not_called_damaged(store, tmp_path, capsys):
+def test_a_store_in_a_read_only_folder_is_read_not_called_damaged(store, tmp_path, capsys, monkeypatch):
     # a colleague's results folder, an archive: reading a store there said "damaged … restore it from a copy"
     # (SQLite could not make the WAL index beside it)
     folder = tmp_path / "archive"
@@ -79,6 +80,7 @@ def test_a_store_in_a_read_only_folder_is_read_not_called_damaged(store, tmp_pat
         assert gx.grid_status(p).done == 1
         assert main(["grid", "status", str(p)]) == 0
         assert "1 of 1 cells done" in capsys.readouterr().out
+        undrawn_figures(monkeypatch)  # the store is read; its report's figures are not what is asked
         assert main(["grid", "report", str(p), "--out", str(tmp_path / "rep")]) == 0
     assert (tmp_path / "rep" / "leaderboard.csv").exists()
 
@@ -391,7 +393,7 @@ def test_one_functions_checkpoint_given_to_the_other_is_named_not_offered_for_de
     assert "delete" not in str(exc.value)
 
 
-def test_report_files_of_data_sets_named_apart_only_by_case_stay_apart_on_any_file_system(tmp_path):
+def test_report_files_of_data_sets_named_apart_only_by_case_stay_apart_on_any_file_system(tmp_path, monkeypatch):
     # "Plant" and "plant" wrote heatmap_Plant.png and heatmap_plant.png: one file on macOS's and Windows' file
     # systems, which do not tell case apart, so one data set's figures and table overwrote the other's
     import graybox as gb
@@ -402,6 +404,7 @@ def test_report_files_of_data_sets_named_apart_only_by_case_stay_apart_on_any_fi
                 [LS], name="g")
     p = tmp_path / "s.sqlite"
     gx.run_grid(g, p)
+    undrawn_figures(monkeypatch)  # the files' names are asserted
     names = [f.name for f in gx.write_report(p, tmp_path / "rep")]
     assert len({n.lower() for n in names}) == len(names)
 
