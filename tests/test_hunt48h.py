@@ -25,16 +25,23 @@ def _select(**kw):
         return gb.select_graybox(CAND, plant(1), validation=plant(2), estimator="ls", sizes=[3], progress=False, **kw)
 
 
+@pytest.fixture(scope="module")
+def checkpoint_arrays(tmp_path_factory) -> dict:
+    """The arrays of the checkpoint ``_select`` writes (made once; each case below edits a copy of the dict)."""
+    path = tmp_path_factory.mktemp("hunt48h") / "sel.npz"
+    _select(checkpoint=path)
+    with np.load(path, allow_pickle=False) as z:
+        return dict(z)
+
+
 @pytest.mark.parametrize("edit", ["blocks columns", "blocks 1-d", "weights text", "thetas columns", "blocks nan",
                                   "lambdas empty", "jsf empty", "blocks negative"])
-def test_a_checkpoint_row_of_the_wrong_shape_or_values_is_refused_as_corrupt(tmp_path, edit):
+def test_a_checkpoint_row_of_the_wrong_shape_or_values_is_refused_as_corrupt(tmp_path, edit, checkpoint_arrays):
     """A row whose arrays a hand edit or a bad copy broke (shapes that do not agree, text for numbers, NaN or negative
     mean squares) was read as it was: a bare IndexError or a matmul ValueError after the search, or a table built on it
     (NaN scores: a row without a model; θ of fewer terms than the structure's)."""
     path = tmp_path / "sel.npz"
-    _select(checkpoint=path)
-    with np.load(path, allow_pickle=False) as z:
-        arrays = dict(z)
+    arrays = dict(checkpoint_arrays)  # its entries are replaced below, never changed in place
     keys = sorted({k.split("/")[0] for k in arrays if "/" in k})
     for k in keys:
         field, new = {
