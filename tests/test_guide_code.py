@@ -5,6 +5,7 @@ import warnings
 from pathlib import Path
 
 import pytest
+from _once import keep_selections
 
 import graybox as gb
 
@@ -17,7 +18,8 @@ def test_the_guide_has_code_to_run():
 
 
 @pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
-def test_every_python_block_of_a_page_runs(page):
+def test_every_python_block_of_a_page_runs(page, monkeypatch):
+    keep_selections(monkeypatch)  # selection.md's first calls are the README's: test_readme_api takes their results
     blocks = re.findall(r"^```python\n(.*?)^```", page.read_text(encoding="utf-8"), flags=re.S | re.M)
     assert blocks
     namespace: dict = {}

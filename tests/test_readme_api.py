@@ -5,6 +5,7 @@ import warnings
 from pathlib import Path
 
 import matplotlib
+from _once import reuse_selections
 
 import graybox as gb
 
@@ -49,7 +50,8 @@ def test_every_name_in_the_table_exists():
         assert hasattr(gb.plots, name)
 
 
-def test_selection_example_runs():
+def test_selection_example_runs(monkeypatch):
+    reuse_selections(monkeypatch)  # its two selections are selection.md's first two, run by test_guide_code before it
     ns = _run_example("API: structure selection for gray-box use")
     assert len(ns["path"].structure) == 17
     assert ns["chosen"].decision.JSF <= 0.031 and len(ns["chosen"].table) > 5
