@@ -473,3 +473,13 @@ def test_fewer_samples_than_inputs_is_read_as_samples_where_the_output_or_the_na
     assert rec.input_names == ("a", "b", "c")
     with pytest.raises(ValueError, match="one row per input"):
         gb.Record(np.array([[0.5, 2.0, 3.0], [1.0, 1.0, 1.0]]), np.array([1.0, 2.0, 3.0]))
+
+
+def test_the_regressors_of_fewer_samples_than_inputs_are_read_as_record_reads_them():
+    # Record(u, y) of u (2, 3) and y of 2 samples is 2 samples of 3 inputs (the output's length settles it), but
+    # regressor_matrix on the same arrays refused them as "one row per input": the coercion was not shown the output
+    s = gb.Structure(["y(k-1)", "u1(k-1)", "u2(k-1)", "u3(k-1)"])
+    u, y = np.array([[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]), np.array([0.1, 0.2])
+    np.testing.assert_array_equal(gb.regressor_matrix(s, u, y), [[0.1, 1.0, 2.0, 3.0]])
+    rec = gb.Record(u, y)
+    np.testing.assert_array_equal(gb.regressor_matrix(s, u.tolist(), list(y)), gb.regressor_matrix(s, rec.u, rec.y))

@@ -151,7 +151,8 @@ def regressor_columns(
     if not (isinstance(u, np.ndarray) and u.dtype == np.float64 and (u.ndim == 1 or (u.ndim == 2 and u.shape[1] != 1
                                                                                     and u.shape[0] >= u.shape[1]))
             and np.isfinite(u).all()):  # fewer samples than inputs: inputs as rows, said by the coercion
-        u = as_input_array(u, "u", names)
+        # shown the output, as Record's is: y's samples settle which of u's axes are the samples
+        u = as_input_array(u, "u", names, output=y)
     n = y.shape[0]
     if u.shape[0] != n:
         raise ValueError(f"u has {u.shape[0]} samples but y has {n}: one input sample per output sample")
