@@ -483,3 +483,14 @@ def test_the_regressors_of_fewer_samples_than_inputs_are_read_as_record_reads_th
     np.testing.assert_array_equal(gb.regressor_matrix(s, u, y), [[0.1, 1.0, 2.0, 3.0]])
     rec = gb.Record(u, y)
     np.testing.assert_array_equal(gb.regressor_matrix(s, u.tolist(), list(y)), gb.regressor_matrix(s, rec.u, rec.y))
+
+
+def test_the_refusal_of_fewer_samples_than_inputs_names_the_way_to_read_them_as_samples():
+    # gb.simulate of a bare structure in u1 … u3 over 2 samples (no output, no model's names) was refused with the
+    # transpose and separate runs as the only ways on; naming the inputs reads them as samples, and the message says so
+    s, th = gb.Structure(["y(k-1)", "u1(k-1)", "u2(k-1)", "u3(k-1)"]), [0.5, 1.0, 2.0, 3.0]
+    u = np.array([[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]])
+    with pytest.raises(ValueError, match=r"2 sample\(s\) of 3 inputs.*name the 3 inputs \(input_names=\.\.\.\)"):
+        gb.simulate(s, th, u, y0=[0.0])
+    got = gb.simulate(s, th, u, y0=[0.0], input_names=("u1", "u2", "u3"))
+    np.testing.assert_allclose(got, [0.0, 1.0 + 4.0 + 9.0])

@@ -263,7 +263,7 @@ def as_input_array(x: object, name: str, names: Sequence[str] | None = None, *, 
         raise ValueError(f"{name} has shape {a.shape}, one row per input: give one column per input, shape ({n}, {k}) "
                          f"(the transpose, x.T, or np.column_stack of the inputs). Or {k} separate run(s) of one "
                          f"input: pass them one at a time (a Record each). (As numpy reads it, {k} sample(s) of {n} "
-                         "inputs: fewer samples than inputs)")
+                         f"inputs: fewer samples than inputs; if that is meant, name the {n} inputs (input_names=...))")
     if a.shape[1] == 0:
         raise ValueError(f"{name} has no input column (shape {a.shape}); for output-only data (a structure "
                          "without input terms) pass a column of zeros")
