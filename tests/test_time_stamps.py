@@ -341,8 +341,10 @@ def test_matlab_datenums_are_refused_not_read_as_seconds(tmp_path, seconds):
 
 # An elapsed time past a day, as a spreadsheet's [h]:mm:ss duration writes it (a test stand's 'Elapsed' column:
 # 23:59:59, 24:00:00, 24:00:01 …, 100:00:00), was refused as 'not a clock time' at its first hour past 24, and a
-# first stamp of 99:59:58 as "'99:59:58' is not a clock time, as the column's first stamp '99:59:58' (line 2) is"
-@pytest.mark.parametrize("start_hour", [23, 99, 0])
+# first stamp of 99:59:58 as "'99:59:58' is not a clock time, as the column's first stamp '99:59:58' (line 2) is";
+# and the end of a 1000-hour endurance run, 999:59:58 then 1000:00:00, as "'1000:00:00' is not a clock time, as the
+# column's first stamp '999:59:58' (line 2) is" (hours of four digits and more were not read)
+@pytest.mark.parametrize("start_hour", [23, 99, 0, 999])
 def test_elapsed_hours_past_a_day_are_read_as_a_duration(tmp_path, start_hour):
     stamps = [start_hour * 3600 + 3597 + 1.5 * k for k in range(8)]  # across the next whole hour, 1.5 s apart
     cells = [f"{int(s // 3600)}:{int(s // 60) % 60:02d}:{s % 60:04.1f}" for s in stamps]

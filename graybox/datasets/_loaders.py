@@ -1263,8 +1263,10 @@ _TIME_UNIT = re.compile(rf"(?:[\[(]\s*|[_/ -])({_OTHER_UNITS})\s*[\])]?\s*$"
 _ISO_STAMP = re.compile(r"(\d{4}-\d{2}-\d{2})[T ](\d{2}):(\d{2})(?::(\d{2})(?:[.,](\d+))?)?"
                         r"\s*(Z|[+-]\d{2}(?::?\d{2})?)?")
 #: A clock time without a date, as loggers that write the date in a column of its own: 09:14:03, 09:14:03.5 (its
-#: seconds required: 01:30 may be a stopwatch's minutes and seconds, read as hours and minutes it is 60 times too long)
-_CLOCK_STAMP = re.compile(r"(\d{1,3}):(\d{2}):(\d{2})(?:[.,](\d+))?")
+#: seconds required: 01:30 may be a stopwatch's minutes and seconds, read as hours and minutes it is 60 times too long);
+#: an elapsed time's hours up to nine digits ([h]:mm:ss counts on: 1000:00:00 ends a 1000-hour run; more
+#: would leave the whole seconds' int64)
+_CLOCK_STAMP = re.compile(r"(\d{1,9}):(\d{2}):(\d{2})(?:[.,](\d+))?")
 #: A date in another order (20.11.2026, 11/20/2026): which is the day is not told by the cell
 _OTHER_DATE = re.compile(r"\d{1,4}[./-]\d{1,2}[./-]\d{1,4}")
 
