@@ -622,6 +622,12 @@ def test_a_grouped_number_past_the_sniffed_lines_of_whole_numbers_is_ambiguous(t
     # a file whose first lines show the point as its decimal mark reads it so, as before
     f = write(tmp_path, "\n".join(lines).replace(f"{sep}750{sep}", f"{sep}750.5{sep}", 1) + "\n")
     assert load_record_csv(f, "speed", "p", time="t").u[-2:].tolist() == [1.05, 1.1]
+    # and so does a file that shows it past the first lines, before or after the cell that alone would be ambiguous: a
+    # point before other than three digits (1.25, 0.500) groups no thousands (was: refused at 1.050 all the same)
+    for tail in (["1.25", "1.050", "1.100"], ["1.050", "1.100", "0.500"]):
+        rows = [sep.join([str(k), str(s), str(k % 7)]) for k, s in enumerate(speeds[:60] + tail)]
+        f = write(tmp_path, "\n".join([lines[0], *rows]) + "\n")
+        assert load_record_csv(f, "speed", "p", time="t").u[-3:].tolist() == [float(c) for c in tail]
 
 
 def test_the_header_again_in_the_file_is_named_as_two_files_joined(tmp_path):

@@ -245,6 +245,9 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
     open_end = -1 if text().endswith(("\n", "\r")) else text().count("\n") + 1
     cut = (": the file's last line, which has no line end: the file was cut off in the middle of it (a copy or "
            "download interrupted, a logger still writing)? Copy the file again, or delete the line")
+    # where the sniffed lines showed no mark: the first cell read as a decimal or a grouped integer (1.050), refused at
+    # the end unless a number with a point that groups no thousands (1.25, 0.500), before or after it, shows the mark
+    ambiguous: tuple[int, str, str] | None = None
     for row in reader:
         line, read = read + first, reader.line_num  # the line the sample starts on, where its first cells are
         if not row or all(not c.strip() for c in row):
@@ -287,11 +290,16 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
             # a time column may hold dates or clock times: its cells are read when the column is whole (_stamps)
             if read == open_end and not row[i].strip():
                 raise ValueError(f"{p}: line {line}, column {wanted[role]!r}: empty cell{cut}")
-            if guessed and _GROUPED.match(row[i].strip()) and "." in row[i]:
-                raise ValueError(_grouped_message(p, line, wanted[role], row[i].strip(), sniffed))
+            if guessed and "." in row[i]:
+                if _GROUPED.match(row[i].strip()):
+                    ambiguous = ambiguous or (line, wanted[role], row[i].strip())
+                elif _DECIMAL_POINT.match(row[i].strip()):
+                    guessed = False
             values[role].append(row[i] if role == "time" else _number(p, line, wanted[role], row[i], dec))
         lines.append(line)
         last = line - first
+    if guessed and ambiguous is not None:
+        raise ValueError(_grouped_message(p, *ambiguous, sniffed))
     if lines and read - last > 1:
         _refuse_open_quote(p, text(), last, lines[-1], read + first - 1, header, delim)
     if not lines:
