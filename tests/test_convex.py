@@ -445,6 +445,25 @@ def test_cluster_bounds_and_cvxpy_constraints_are_the_same_at_any_zero_of_the_si
     assert raw.clusters()["Σy"] == pytest.approx(-150.0, rel=1e-9)
 
 
+def test_cluster_bounds_that_pin_a_one_term_cluster_hold_it_exactly_in_a_centred_fit():
+    # fitted raw, ClusterBounds pinning Σyu = 0 and Σu = 0.25 gave exactly those θ; made on the centred signals and
+    # mapped back (θ = A θ_c + t) they came out Σyu = -3.5e-16 (a term asked to be absent, present) and Σu 0.25 + 4e-11
+    # at u + 1e3, y + 1e5; with every cluster pinned, Σu² = -4.6e-16 and Σ0 = 6e-9 for 0
+    s = Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)^2", "y(k-1)u(k-1)", "1"])
+    full = Structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "1"])
+    pins = [(s, {"Σyu": (0.0, 0.0), "Σu": (0.25, 0.25)}),
+            (full, {"Σy": (0.6, 0.6), "Σu": (0.3, 0.3), "Σu²": (0.0, 0.0), "Σ0": (0.0, 0.0)})]
+    for du, dy in ((0.0, 0.0), (1e3, 1e5)):
+        rec = _offset_record(du, dy)
+        points = StaticPoints([0.8 + du, 1.5 + du], [1.1 + dy, 2.3 + dy])
+        for st, bounds in pins:
+            bound = ClusterBounds(bounds)
+            th = pe_thetas(st, rec, points, lambdas=[0.5, 1.0], constraints=bound)
+            for model in (cls(st, rec, constraints=bound).model, Model(st, th[0]), Model(st, th[1])):
+                got = model.clusters()
+                assert all(got[k] == lo for k, (lo, _) in bounds.items()), (du, got)
+
+
 def test_static_points_outside_the_data_range_are_used_and_named_once(rec):
     # static knowledge where the dynamic data do not reach is what gray-box identification is for
     far = StaticPoints([900.0, 3000.0], [6.0, 60.0])

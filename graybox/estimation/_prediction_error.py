@@ -570,6 +570,24 @@ def _centred_affine(c: StaticConstraint, ctx: StaticContext, ctx_c: StaticContex
     return _centred_constraint(c, d).affine(ctx_c)
 
 
+def _raw_pins(cons: Sequence[StaticConstraint], ctx: StaticContext, d: _Data, theta: np.ndarray) -> np.ndarray:
+    """θ (shape (n,) or (K, n), NaN rows kept) of a fit on the centred signals with each parameter that a cluster
+    bound fixes alone (a cluster of one term, equal bounds) set to its value: mapped back, A θ_c + t carries the
+    offsets' round-off (Σyu = 0 came out -3.5e-16, a term asked to be absent present; Σ0 = 0 as 6e-9 at y + 1e5),
+    where the raw fit met such a pin exactly."""
+    if d.A is None:
+        return theta
+    for c in cons:
+        if not isinstance(c, ClusterBounds):
+            continue
+        r = c.affine(ctx)
+        for a, b in zip(r.A_eq, r.b_eq):
+            nz = np.flatnonzero(a)
+            if nz.size == 1:  # NaN rows (members that failed) stay NaN
+                theta[..., nz[0]] = np.where(np.isnan(theta[..., nz[0]]), np.nan, b / a[nz[0]])
+    return theta
+
+
 def _centred_constraint(c: StaticConstraint, d: _Data) -> StaticConstraint:
     """``c`` with its own points (if any) on the centred signals of ``d``."""
     pts = getattr(c, "points", None)
@@ -1255,7 +1273,7 @@ def cls(
         qp = _QP(d, None, cons, ctx, solver, solver_options)
         z = qp.solve(1.0, 0.0)
         qp.warn_inaccurate()
-    theta = d.theta(z)
+    theta = _raw_pins(cons, ctx, d, d.theta(z))
     _after_solve(cons, ctx, d, z)
     info = sp  # (read above; _cls_setup has raised whatever reading it raises)
     model = Model(st, theta, name=name, **carried_from(recs, info))  # the records' input order, period and units
@@ -1628,7 +1646,7 @@ def _pe_fit(structure, data, static=None, *, lambdas=None, constraints=None, sol
         if len(failures) == lam.size:  # as the one solve's error would be: InfeasibleError where each was one
             kind = InfeasibleError if all(isinstance(e, InfeasibleError) for e in unsolved) else ValueError
             raise kind(_every_member_failed(failures, lam)) from unsolved[0]
-    thetas = d.theta(Z)
+    thetas = _raw_pins(cons, ctx, d, d.theta(Z))
     # a member the constraints' own checks refuse is a failed member (a free Σ_y of eq. (22) reaches 1 as λ1 → 0,
     # where the points' linear residual (1 − Σ_y)(ȳ − H(ū)) vanishes): the sweep goes on
     for i in np.flatnonzero(ok):
