@@ -293,6 +293,21 @@ def test_a_ramp_named_as_an_input_is_an_input_and_static_levels_are_no_time():
     assert points.input_names == ("u1", "u2")  # designed levels in even steps: points, not samples in time
 
 
+def test_a_ramp_input_of_a_frame_by_position_is_told_a_way_to_be_read():
+    # a model's free run over pd.DataFrame(np.column_stack([ramp, valve])) (columns 0, 1) was told "if it is an input
+    # that ramps, name the columns as the inputs, input_names=['0', '1']": no identifiers, and Model.simulate takes no
+    # input_names. The hint now names the columns as the inputs the call reads, which every entry takes
+    import pandas as pd
+    model = gb.Model(gb.Structure(["y(k-1)", "a(k-1)", "b(k-1)"]), [0.5, 1.0, 2.0], input_names=("a", "b"))
+    u = np.column_stack([np.linspace(1.0, 2.0, 6), [0.5, 0.1, 0.7, 0.2, 0.9, 0.3]])
+    frame = pd.DataFrame(u)
+    with pytest.raises(ValueError, match=r"looks like time.*if it is an input that ramps, name the columns as the "
+                                         r"inputs: df\.set_axis\(\['a', 'b'\], axis=1\)$"):
+        model.simulate(frame, y0=[0.0])
+    np.testing.assert_array_equal(model.simulate(frame.set_axis(["a", "b"], axis=1), y0=[0.0]),
+                                  model.simulate(u, y0=[0.0]))
+
+
 def test_a_saved_index_beside_an_input_is_refused_without_taking_its_step_for_seconds():
     import pandas as pd
     df = pd.DataFrame({"Unnamed: 0": np.arange(20), "u": np.sin(np.arange(20.0))})  # read_csv of a saved index

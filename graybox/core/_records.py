@@ -119,11 +119,16 @@ def _refuse_time_column(x: Any, cols: list, labels: list[str], expected: Sequenc
         # a count in steps of 1 (a sample number, a saved index) says nothing of seconds: the period is the user's
         period = ("with the sampling period (s) as Ts=" if step == 1 and x[cols[found[0]]].dtype.kind in "iu" else
                   f"with its step as Ts={step:g} if it is seconds")
+        # the columns named as the inputs the call reads, which every entry takes (a model's free run has no
+        # input_names, and a frame's default columns 0, 1 are no identifiers to give it)
+        named = f"df.set_axis({list(expected)!r}, axis=1)"
+        if all(l.isidentifier() for l in labels):
+            named = f"input_names={labels!r} (where the call takes them) or {named}"
         raise ValueError(f"{name}: column {label!r} of the DataFrame's columns {labels} looks like time or a count of "
                          f"samples (strictly increasing in even steps of {step:g}), which is no input: pass the input "
                          f"columns only, e.g. df[{rest!r}], {period} (graybox.load_record_csv(path, u=..., y=..., "
                          f"time={label!r}) reads a file's time column so); if it is an input that ramps, name the "
-                         f"columns as the inputs, input_names={labels!r}")
+                         f"columns as the inputs: {named}")
 
 
 def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: object = None, *,
