@@ -447,8 +447,8 @@ def test_cluster_bounds_and_cvxpy_constraints_are_the_same_at_any_zero_of_the_si
 
 def test_cluster_bounds_that_pin_a_one_term_cluster_hold_it_exactly_in_a_centred_fit():
     # fitted raw, ClusterBounds pinning Σyu = 0 and Σu = 0.25 gave exactly those θ; made on the centred signals and
-    # mapped back (θ = A θ_c + t) they came out Σyu = -3.5e-16 (a term asked to be absent, present) and Σu 0.25 + 4e-11
-    # at u + 1e3, y + 1e5; with every cluster pinned, Σu² = -4.6e-16 and Σ0 = 6e-9 for 0
+    # mapped back (θ = A θ_c + t) they came out Σyu = -3.5e-16 (a term asked to be absent, present) and
+    # Σu = 0.25 + 4e-11 at u + 1e3, y + 1e5; with every cluster pinned, Σu² = -4.6e-16 and Σ0 = 6e-9 for 0
     s = Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)^2", "y(k-1)u(k-1)", "1"])
     full = Structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "1"])
     pins = [(s, {"Σyu": (0.0, 0.0), "Σu": (0.25, 0.25)}),
