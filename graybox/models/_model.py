@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from collections.abc import Mapping
 from typing import Literal
 
 import numpy as np
@@ -220,7 +221,7 @@ class Model(Relocked):
     def _one_input(self, ubar: object) -> object:
         """A one-input model's levels given as a dict by its input's name (as local_model and the surfaces of
         several inputs take them): its values; anything else as given (the static paths check it)."""
-        if isinstance(ubar, dict):
+        if isinstance(ubar, Mapping):
             return np.asarray(frame_inputs(ubar, self.input_names, "ubar", steady=True), dtype=float).ravel()
         return ubar
 
@@ -230,7 +231,7 @@ class Model(Relocked):
         if self.n_inputs > 1:
             return _static_surface.surface_equilibria(self.structure, self.theta, ubar, input_names=self.input_names)
         one = self._one_input(ubar)
-        return _static.equilibria(self.structure, self.theta, one[0] if isinstance(ubar, dict) and one.size == 1
+        return _static.equilibria(self.structure, self.theta, one[0] if isinstance(ubar, Mapping) and one.size == 1
                                   else one)
 
     def static_gain(self, ubar: np.ndarray, y0: float | None = None, *, strict: bool = True) -> np.ndarray:
