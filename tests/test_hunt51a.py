@@ -343,7 +343,7 @@ def test_local_models_are_drawn_one_colour_each_with_a_legend_that_fits(n):
     assert len(ax.get_lines()) == n and len(colours) == n
     legend = ax.get_legend()
     assert 2 <= len(legend.get_texts()) <= 20
-    assert legend.get_texts()[0].get_text() == "ū = 800"
+    assert legend.get_texts()[0].get_text() == "ū = 800 rpm"  # in the model's input unit (hunt60e)
 
 
 def test_slices_of_many_levels_keep_a_legend_that_fits():
