@@ -532,3 +532,27 @@ def test_a_one_input_models_levels_by_name_in_a_dict():
     assert m.equilibria({"pump": 1.0}) == m.equilibria(1.0)
     with pytest.raises(ValueError, match="'u'.*name none of the inputs"):
         m.static_curve({"u": lv})
+
+
+def test_static_points_take_their_levels_by_input_name_in_a_dict():
+    """StaticPoints({"a": [...], "b": [...]}, ybar) said "ubar must be an array of numbers, got dict" while
+    static_curve and local_model took the same dict by input name (mend60i): the keys are the input_names, a dict
+    read in another order than input_names lands on the inputs by name, and names other than input_names are refused."""
+    ybar = [5.0, 6.0]
+    p = StaticPoints({"a": [1.0, 2.0], "b": [3.0, 4.0]}, ybar)
+    assert p.input_names == ("a", "b")
+    np.testing.assert_array_equal(p.ubar, [[1.0, 3.0], [2.0, 4.0]])
+    q = StaticPoints({"b": [3.0, 4.0], "a": [1.0, 2.0]}, ybar, input_names=("a", "b"))
+    assert q.input_names == ("a", "b")
+    np.testing.assert_array_equal(q.ubar, p.ubar)
+    one = StaticPoints({"pump": [0.5, 1.0, 2.0]}, [1.0, 2.0, 3.0])
+    assert one.input_names == ("pump",) and one.ubar.shape == (3,)
+    assert StaticPoints({"a": 1.0, "b": 3.0}, [5.0]).ubar.tolist() == [[1.0, 3.0]]  # one number each: one point
+    rep = StaticPoints.from_repeats({"pump": [1.0, 1.0, 2.0]}, [1.0, 3.0, 5.0])
+    assert rep.input_names == ("pump",) and rep.ybar.tolist() == [2.0, 5.0]
+    with pytest.raises(ValueError, match=r"keys \['a', 'b'\] are not the input_names \('a', 'c'\)"):
+        StaticPoints({"a": [1.0, 2.0], "b": [3.0, 4.0]}, ybar, input_names=("a", "c"))
+    with pytest.raises(ValueError, match=r"different numbers of levels"):
+        StaticPoints({"a": [1.0, 2.0], "b": [3.0]}, ybar)
+    with pytest.raises(TypeError, match=r"ubar\['b'\]"):
+        StaticPoints({"a": [1.0, 2.0], "b": [3.0, "x"]}, ybar)

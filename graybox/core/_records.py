@@ -65,6 +65,21 @@ def _levels_by_name(x: Mapping[Any, Any], name: str) -> object:
     return pd.DataFrame(cols)
 
 
+def points_by_name(x: object, names: Sequence[str] | None, name: str) -> tuple[object, Sequence[str] | None]:
+    """Static levels ``x`` and their inputs' names: a dict keyed by input name (``{"flow": [1.0, 2.0], "inlet":
+    [20.0, 25.0]}``, as static curves take levels) becomes the DataFrame :func:`frame_inputs` reads by name, its keys
+    the names where ``names`` is None, and ``ValueError`` where ``names`` names other inputs; anything else as it is."""
+    if not isinstance(x, Mapping):
+        return x, names
+    levels = _levels_by_name(x, name)
+    frame = levels.to_frame().T if _is_series(levels) else levels  # one number each: one point
+    keys = tuple(x)
+    if names is not None and (isinstance(names, str) or set(keys) != set(names)):
+        raise ValueError(f"{name}: the dict's keys {list(keys)!r} are not the input_names {names!r}: name each input "
+                         "once, as a key or in input_names (both: the same names)")
+    return frame, (keys if names is None else names)
+
+
 def output_series(y: object) -> object | None:
     """``y`` when it is a pandas Series with a name (``df["p"]``), else None: its column is no input."""
     label = getattr(y, "name", None) if _is_series(y) else None
@@ -414,11 +429,13 @@ class StaticPoints(Relocked):
 
     Parameters
     ----------
-    ubar : array_like or pandas.DataFrame, shape (M,) or (M, m)
+    ubar : array_like, pandas.DataFrame or dict, shape (M,) or (M, m)
         Constant input levels (engineering units), all distinct; one column per input (a
         point ū in input space per row) for several inputs. A DataFrame is read by column name
         where its columns are the ``input_names``, by position where they name none of them, and
-        refused where they name some (as :class:`Record`'s ``u``).
+        refused where they name some (as :class:`Record`'s ``u``). A dict keyed by input name
+        (``{"flow": [1.0, 2.0], "inlet": [20.0, 25.0]}``, as static curves take levels) gives the
+        ``input_names`` by its keys; with ``input_names`` given, its keys must be those names.
     ybar : array_like, shape (M,)
         Settled output at each level.
     name : str, optional
@@ -444,8 +461,8 @@ class StaticPoints(Relocked):
 
     def __post_init__(self) -> None:
         check_str(self.name, "StaticPoints: name")
-        u = as_input_array(self.ubar, f"{self.name}: ubar", self.input_names, output=output_series(self.ybar),
-                           row="point")
+        ubar, given = points_by_name(self.ubar, self.input_names, f"{self.name}: ubar")
+        u = as_input_array(ubar, f"{self.name}: ubar", given, output=output_series(self.ybar), row="point")
         y = as_1d_finite(self.ybar, f"{self.name}: ybar")
         if u.shape[0] != y.shape[0]:
             raise ValueError(_lengths(self.name, "ubar", "ybar", u, y))
@@ -456,8 +473,7 @@ class StaticPoints(Relocked):
             raise ValueError(f"{self.name}: duplicated ubar value(s) {listed(uniq[counts > 1].tolist())}; for repeated "
                              "measurements at one level use StaticPoints.from_repeats, which averages them")
         m = 1 if u.ndim == 1 else u.shape[1]
-        names = default_input_names(m) if self.input_names is None else check_input_names(
-            self.input_names, m, f"{self.name}: input_names")
+        names = default_input_names(m) if given is None else check_input_names(given, m, f"{self.name}: input_names")
         object.__setattr__(self, "ubar", u)
         object.__setattr__(self, "ybar", y)
         object.__setattr__(self, "input_names", names)
@@ -498,9 +514,9 @@ class StaticPoints(Relocked):
 
         Parameters
         ----------
-        ubar : array_like or pandas.DataFrame, shape (N,) or (N, m)
+        ubar : array_like, pandas.DataFrame or dict, shape (N,) or (N, m)
             Input level of each measurement (engineering units); levels may repeat. A DataFrame
-            is read as :class:`StaticPoints` reads one (by name where its columns are the inputs).
+            or dict is read as :class:`StaticPoints` reads one (by name where its columns are the inputs).
         ybar : array_like, shape (N,)
             Settled output of each measurement.
         name, input_names
@@ -522,6 +538,7 @@ class StaticPoints(Relocked):
             there. (Their spread is the static uncertainty that D_SF's band B stands for.)
         """
         check_str(name, "StaticPoints: name")
+        ubar, input_names = points_by_name(ubar, input_names, f"{name}: ubar")
         u = as_input_array(ubar, f"{name}: ubar", input_names, output=output_series(ybar), row="point")
         y = as_1d_finite(ybar, f"{name}: ybar")
         if u.shape[0] != y.shape[0]:
