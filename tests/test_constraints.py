@@ -194,7 +194,7 @@ def test_user_constraint_errors(rec):
         cls(S15, rec, None, constraints=[lambda th: th[0] >= 0])
 
 
-def test_user_constraint_with_data_no_theta_meets_is_refused_by_name(rec):
+def test_user_constraint_with_data_no_theta_meets_is_refused_by_name(rec, ls):
     # an equality at an infinite value: Clarabel reported 'optimal' and cls returned θ with clusters near 1e19;
     # a NaN bound: cvxpy's "Problem data contains NaN", naming no constraint
     y_at_inf = UserConstraint(lambda th: th[0] + th[1] == np.inf, name="Σy at inf")
@@ -206,6 +206,18 @@ def test_user_constraint_with_data_no_theta_meets_is_refused_by_name(rec):
     # an infinite bound on an inequality says "no bound" and is kept
     m = cls(S15, rec, None, constraints=UserConstraint(lambda th: th[0] <= np.inf)).model
     assert np.all(np.isfinite(m.theta))
+    # an infinite coefficient (inf @ θ <= 1), or a bound no finite θ meets (θ1 >= inf): cvxpy's "Problem data contains
+    # NaN or Inf" or "solver clarabel failed", naming neither the constraint nor the infinity (mend60i)
+    n = len(S15)
+    for fn in (lambda th: np.r_[np.inf, np.zeros(n - 1)] @ th <= 1, lambda th: [th[1] <= 2.0, th[0] >= np.inf],
+               lambda th: np.r_[-np.inf, np.zeros(n - 1)] @ th >= -1, lambda th: th[0] <= -np.inf):
+        with pytest.raises(ValueError, match=r"(?s)an inf: constraint .*infinite coefficient of θ, or a bound no fin"):
+            cls(S15, rec, None, constraints=UserConstraint(fn, name="an inf"))
+    with pytest.raises(ValueError, match=r"an inf: .*infinite coefficient"):
+        pe_thetas(S15, rec, PTS, lambdas=[0.5], constraints=UserConstraint(lambda th: th[0] >= np.inf, name="an inf"))
+    # the side that bounds nothing, element by element, is kept: the fit as without it
+    loose = UserConstraint(lambda th: [th[0] >= -np.inf, th[:2] <= np.array([np.inf, 1e3])])
+    np.testing.assert_allclose(cls(S15, rec, None, constraints=loose).model.theta, ls, rtol=1e-6, atol=1e-9)
 
 
 # ---------------------------------------------------------------------------------------------

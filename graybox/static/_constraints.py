@@ -1444,6 +1444,37 @@ def _non_finite_data(c: cp.Constraint) -> tuple[bool, bool]:
     return nan, inf
 
 
+def _no_bound(c: cp.Constraint) -> bool:
+    """Whether an inequality ``c`` (``expr <= 0``) whose data hold an infinity is met by every θ, an infinite bound on
+    the side that bounds nothing (θ1 <= inf, θ1 >= -inf; the solvers take it): ``expr`` is finite or −inf alike at
+    the variables 0 and ±1e9, where an infinite coefficient gives +inf or NaN at one of them. Anything else, or a
+    constraint of another cone, is not; one that cannot be evaluated so (a parameter without a value) is left to the
+    solve, as before."""
+    import cvxpy as cp
+
+    if not isinstance(c, (cp.constraints.Inequality, cp.constraints.NonPos)):
+        return False
+    saved = [v.value for v in c.variables()]
+    seen = []
+    try:
+        for z in (0.0, 1e9, -1e9):
+            for v in c.variables():
+                v.value = np.full(v.shape, z)
+            with np.errstate(invalid="ignore", over="ignore"):  # inf·0 and inf − inf are what is looked for
+                value = c.expr.value
+            if value is None:  # a parameter without a value: the solve says so
+                return True
+            seen.append(np.asarray(value, float))
+    except ValueError:  # a variable of its own that takes no such value (nonneg=True): left to the solver, as before
+        return True
+    finally:
+        for v, old in zip(c.variables(), saved):
+            v.value = old
+    finite = [np.isfinite(e) for e in seen]
+    low = [np.isneginf(e) for e in seen]
+    return bool(np.all(np.logical_and.reduce(finite) | np.logical_and.reduce(low)))
+
+
 def _cluster_bound_key(k: object) -> str | tuple[int, ...]:
     """A cluster bound's key: a name as it is, a key in :func:`cluster_powers`' forms as the flat (p, m_1, …, m_m)
     the cluster maps index ((1, (1, 0)) is (1, 1, 0))."""
@@ -1514,9 +1545,15 @@ class UserConstraint(StaticConstraint):
                 raise ValueError(f"{self.name}: constraint {c} is not convex (DCP)")
             nan, inf = _non_finite_data(c)
             # a NaN reached the solve as cvxpy's "Problem data contains NaN", naming no constraint; an equality at an
-            # infinite value came back from Clarabel as 'optimal', and cls returned θ with clusters near 1e19
-            if nan or (inf and isinstance(c, (cp.constraints.Equality, cp.constraints.Zero))):
-                what = "a NaN" if nan else "an infinite value in an equality, which no finite θ meets"
+            # infinite value came back from Clarabel as 'optimal', and cls returned θ with clusters near 1e19; an
+            # inequality with an infinite coefficient (inf @ θ <= 1) or bound (θ1 >= inf) as "Problem data contains
+            # NaN or Inf" or "solver clarabel failed"
+            if nan or (inf and (isinstance(c, (cp.constraints.Equality, cp.constraints.Zero))
+                                or not _no_bound(c))):
+                what = ("a NaN" if nan else "an infinite value in an equality, which no finite θ meets"
+                        if isinstance(c, (cp.constraints.Equality, cp.constraints.Zero)) else
+                        "an infinite value that is no mere absent bound (θ <= inf): an infinite coefficient of θ, or "
+                        "a bound no finite θ meets (θ >= inf)")
                 raise ValueError(f"{self.name}: constraint {c} holds {what} (in its constants or its parameters' "
                                  "values); give finite numbers")
         return out
