@@ -556,3 +556,5 @@ def test_static_points_take_their_levels_by_input_name_in_a_dict():
         StaticPoints({"a": [1.0, 2.0], "b": [3.0]}, ybar)
     with pytest.raises(TypeError, match=r"ubar\['b'\]"):
         StaticPoints({"a": [1.0, 2.0], "b": [3.0, "x"]}, ybar)
+    with pytest.raises(ValueError, match=r"ubar: the dict names no input"):
+        StaticPoints({}, [1.0])

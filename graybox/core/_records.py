@@ -71,6 +71,8 @@ def points_by_name(x: object, names: Sequence[str] | None, name: str) -> tuple[o
     the names where ``names`` is None, and ``ValueError`` where ``names`` names other inputs; anything else as it is."""
     if not isinstance(x, Mapping):
         return x, names
+    if not x:  # not "no input column (shape (1, 0))", as the one point of no levels would be read
+        raise ValueError(f"{name}: the dict names no input; key each input's levels by its name")
     levels = _levels_by_name(x, name)
     frame = levels.to_frame().T if _is_series(levels) else levels  # one number each: one point
     keys = tuple(x)
