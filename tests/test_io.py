@@ -518,3 +518,92 @@ def test_a_path_under_the_home_folder_written_with_a_tilde(tmp_path, monkeypatch
     written = gb.save(m, "~/m.json")
     assert (tmp_path / "m.json").is_file() and written == tmp_path / "m.json"
     assert gb.load("~/m.json").theta.tolist() == [0.5, 1.0]
+
+
+def _counting(monkeypatch, name, owner):
+    """Count the calls of owner.name (a per-number reader), keeping what it does."""
+    calls = []
+    real = getattr(owner, name)
+
+    def counted(*args, **kwargs):
+        calls.append(1)
+        return real(*args, **kwargs)
+    monkeypatch.setattr(owner, name, counted)
+    return calls
+
+
+def test_a_long_record_is_read_by_one_conversion_not_number_by_number(monkeypatch):
+    # 10**6 samples took ~2.4 s of CPU to load: every number went through a Python call while parsing (the check
+    # for numbers beyond the float range) and again while reading (a NumPy array of each); now neither, for a
+    # record of one input and of two (rows), while the numbers still come back bit for bit
+    rng = np.random.default_rng(3)
+    n = 10**4
+    for u in (rng.standard_normal(n), rng.standard_normal((n, 2))):
+        rec = gb.Record(u, rng.standard_normal(n) * 1e-300, Ts=0.25, name="long")
+        text = gb.to_json(rec)
+        per_number = _counting(monkeypatch, "float", _io._Reader)
+        parsed = _counting(monkeypatch, "_finite_float", _io)
+        back = gb.from_json(text, expect=gb.Record)
+        monkeypatch.undo()
+        assert len(per_number) < 10 and not parsed
+        np.testing.assert_array_equal(bits(back.u), bits(rec.u))
+        np.testing.assert_array_equal(bits(back.y), bits(rec.y))
+        assert back.u.shape == rec.u.shape and not back.y.flags.writeable
+
+
+def test_a_long_record_of_awkward_numbers_round_trips_bit_for_bit():
+    # the shortest repr of every kind of float64 (subnormals, -0.0, the largest, integers beyond 2**53) and
+    # integers a hand or another tool wrote, read as float() reads them
+    rng = np.random.default_rng(4)
+    n = 10**5
+    y = rng.standard_normal(n) * 10.0 ** rng.integers(-320, 308, n)
+    y[:6] = [-0.0, 5e-324, -2.2250738585072014e-308, 1.7976931348623157e308, 2.0**53 + 2, 1e-310]
+    rec = gb.Record(rng.standard_normal(n), y)
+    back = gb.from_json(gb.to_json(rec))
+    np.testing.assert_array_equal(bits(back.y), bits(y))
+    text = gb.to_json(gb.Record(np.arange(4.0), np.arange(4.0))).replace("[0.0, 1.0, 2.0, 3.0]",
+                                                                        f"[0, {2**53 + 1}, {10**300}, -7]")
+    back = gb.from_json(text)
+    np.testing.assert_array_equal(bits(back.u), bits([0.0, float(2**53 + 1), float(10**300), -7.0]))
+
+
+@pytest.mark.parametrize("token, message", [
+    ("1e400", r"JSON: the number 1e400 is beyond the float range"),
+    ("-1E+999", r"JSON: the number -1E\+999 is beyond the float range"),
+    ("1" + "0" * 400, r"object\.y\[1\]: a number beyond the float range"),
+    ('"x"', r"object\.y\[1\]: expected a number, got the string 'x'"),
+    ("true", r"object\.y\[1\]: expected a number, got bool"),
+    ("[1.0]", r"object\.y\[1\]: expected a number, got list"),
+    ("null", r"object\.y\[1\]: expected a number, got NoneType"),
+    ("NaN", r"y has 1 non-finite value"),
+    ('"inf"', r"y has 1 non-finite value"),
+])
+def test_a_bad_number_in_a_long_array_is_refused_where_it_is(token, message):
+    y = np.arange(2000) / 8.0  # 0.0, 0.125, …: the second number, y[1], is replaced
+    text = gb.to_json(gb.Record(np.ones(2000), y))
+    assert text.index("0.125") > text.index('"y"')
+    bad = text.replace("0.125", token, 1)
+    with pytest.raises(gb.GrayboxFileError, match=message):
+        gb.from_json(bad)
+
+
+def test_a_long_matrix_keeps_its_refusals_and_its_literals():
+    # a ParetoSet's thetas: ragged rows refused; "nan"/"inf" strings, NaN and Infinity literals (Python's json writes
+    # them) and integers read as the numbers they are
+    K = 300
+    ps = gb.ParetoSet(gb.Structure(["y(k-1)", "u(k-1)"]), np.ones((K, 2)), np.full(K, 0.5), np.zeros(K), np.zeros(K),
+                      np.zeros(K))
+    doc = json.loads(gb.to_json(ps))
+    obj = doc["object"]
+    obj["thetas"][7], obj["thetas"][8], obj["thetas"][9] = ["nan", "nan"], [float("nan"), float("nan")], [3, -0.0]
+    obj["JS"][7], obj["JS"][8] = "inf", float("inf")
+    obj["failures"] = {"7": "no start was feasible", "8": "the solver failed"}
+    back = gb.from_json(json.dumps(doc))
+    assert np.isnan(back.thetas[7:9]).all() and (back.JS[7:9] == np.inf).all() and np.isfinite(back.JS[10:]).all()
+    assert back.thetas[9, 0] == 3.0 and np.signbit(back.thetas[9, 1]) and back.thetas.shape == (K, 2)
+    doc["object"]["thetas"][9] = [1.0]
+    with pytest.raises(gb.GrayboxFileError, match=r"object\.thetas: rows of different lengths"):
+        gb.from_json(json.dumps(doc))
+    doc["object"]["thetas"][9] = 1.0
+    with pytest.raises(gb.GrayboxFileError, match=r"object\.thetas\[9\]: expected a list, got float"):
+        gb.from_json(json.dumps(doc))

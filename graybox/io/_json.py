@@ -60,6 +60,7 @@ import base64
 import binascii
 import errno
 import importlib
+import itertools
 import json
 import math
 import os
@@ -126,6 +127,33 @@ def _arr(a: Any) -> Any:
     return [_arr(r) for r in a] if a.ndim > 1 else [_num(v) for v in a]
 
 
+#: The strings a number may be written as (JSON has no ±∞ nor NaN).
+_NON_FINITE = frozenset({"nan", "inf", "-inf"})
+
+
+def _numbers(v: Any, ndim: int) -> np.ndarray | None:
+    """``v`` as an array of ``ndim`` dimensions in one conversion, when it is one: a non-empty nest of lists of equal
+    lengths holding JSON numbers and ``"nan"``, ``"inf"``, ``"-inf"`` (read as ``float()`` reads them, bit for bit);
+    None for anything else, which the reader then refuses (or reads) number by number, naming where."""
+    if type(v) is not list or not v:
+        return None
+    flat = v
+    for _ in range(ndim - 1):
+        if set(map(type, flat)) != {list} or len(set(map(len, flat))) != 1:
+            return None
+        flat = list(itertools.chain.from_iterable(flat))
+    kinds = set(map(type, flat))
+    if not kinds <= {float, int, str}:  # bool, None, lists deeper than ndim, objects
+        return None
+    if str in kinds and not {x for x in flat if type(x) is str} <= _NON_FINITE:
+        return None
+    try:
+        a = np.array(v, dtype=float)
+    except (OverflowError, ValueError):  # an integer beyond the float range
+        return None
+    return a if a.ndim == ndim else None
+
+
 class _Reader:
     """Typed access to decoded JSON, with errors that say where."""
 
@@ -186,6 +214,10 @@ class _Reader:
     def array(self, v: Any, where: str, ndim: int) -> np.ndarray:
         if ndim == 0:
             return np.array(self.float(v, where))
+        whole = _numbers(v, ndim)
+        if whole is not None:
+            return locked(whole)
+        # number by number: what is not a regular array of numbers is refused, naming where
         rows = self.list(v, where)
         out = [self.array(r, f"{where}[{i}]", ndim - 1) for i, r in enumerate(rows)]
         if ndim > 1 and len({o.shape for o in out}) > 1:
@@ -1057,10 +1089,34 @@ def _finite_float(text: str) -> float:
     return x
 
 
+def _holds_infinity(v: Any) -> bool:
+    """Whether decoded JSON holds an infinite float anywhere (a list of numbers checked in one pass)."""
+    if type(v) is dict:
+        return any(_holds_infinity(x) for x in v.values())
+    if type(v) is not list:
+        return type(v) is float and math.isinf(v)
+    while v and set(map(type, v)) == {list}:  # the rows of a matrix: one list of their numbers
+        v = list(itertools.chain.from_iterable(v))
+    kinds = set(map(type, v))
+    if float in kinds and any(map(math.isinf, v if kinds == {float} else [x for x in v if type(x) is float])):
+        return True
+    return bool(kinds & {list, dict}) and any(_holds_infinity(x) for x in v if type(x) in (list, dict))
+
+
 def _parse(text: str, source: str) -> tuple[dict, Any]:
     rd = _Reader(source)
+    # JSON's floats read by json's own parser (a Python call for each, to refuse 1e400, took most of the time of a
+    # long record): a number beyond the float range then reads as an infinity, as only a NaN/Infinity literal would
+    # too. A document holding either, or refused, is read again number by number, refused or read as it always was
+    constants: list[str] = []
     try:
-        doc = json.loads(text, object_pairs_hook=_once, parse_float=_finite_float)
+        doc = json.loads(text, object_pairs_hook=_once, parse_constant=lambda c: constants.append(c) or float(c))
+        fast = not constants and not _holds_infinity(doc)
+    except (ValueError, RecursionError):
+        fast = False
+    try:
+        if not fast:
+            doc = json.loads(text, object_pairs_hook=_once, parse_float=_finite_float)
     except _Refused as exc:
         raise rd.fail("JSON", str(exc)) from None
     except json.JSONDecodeError as exc:
