@@ -607,3 +607,43 @@ def test_a_long_matrix_keeps_its_refusals_and_its_literals():
     doc["object"]["thetas"][9] = 1.0
     with pytest.raises(gb.GrayboxFileError, match=r"object\.thetas\[9\]: expected a list, got float"):
         gb.from_json(json.dumps(doc))
+
+
+def test_long_arrays_in_a_datasets_extra_are_read_in_one_conversion(monkeypatch):
+    # a Dataset's extra holding long arrays (noise samples, counts, a mask) was read number by number
+    rng = np.random.default_rng(5)
+    n = 10**4
+    rec = gb.Record(rng.standard_normal(n), rng.standard_normal(n))
+    noise = rng.standard_normal(n)
+    noise[:3] = [np.nan, -np.inf, -0.0]
+    extra = {"noise": noise, "counts": rng.integers(-2**63, 2**63 - 1, n), "mask": rng.random(n) < 0.5,
+             "small": rng.standard_normal((n // 10, 10)).astype(np.float32), "bytes": rng.integers(0, 255, n, np.uint8)}
+    text = gb.to_json(gb.Dataset(rec, rec, extra=extra))
+    per_number = [_counting(monkeypatch, name, _io._Reader) for name in ("float", "int", "bool")]
+    back = gb.from_json(text).extra
+    monkeypatch.undo()
+    assert sum(map(len, per_number)) < 40
+    for k, a in extra.items():
+        assert back[k].dtype == a.dtype and back[k].shape == a.shape, k
+        want = np.where(np.isnan(a), np.nan, a).astype(a.dtype) if a.dtype.kind == "f" else a  # graybox's one NaN
+        assert back[k].tobytes() == want.tobytes(), k
+
+
+@pytest.mark.parametrize("dtype, data, message", [
+    ("float32", [0.5, 1e300], r"extra\.a\.array\.data: a value beyond the range of float32"),
+    ("float64", [0.5, "x"], r"extra\.a\.array\.data\[1\]: expected a number, got the string 'x'"),
+    ("float64", [0.5, True], r"extra\.a\.array\.data\[1\]: expected a number, got bool"),
+    ("int64", [1, 2**63], r"extra\.a\.array\.data\[1\]: an integer beyond the 64-bit range"),
+    ("int64", [1, 1.0], r"extra\.a\.array\.data\[1\]: expected an integer, got 1\.0"),
+    ("int64", [1, True], r"extra\.a\.array\.data\[1\]: expected an integer, got True"),
+    ("uint8", [1, 256], r"extra\.a\.array\.data: a value beyond the range of uint8"),
+    ("uint8", [1, -1], r"extra\.a\.array\.data: a value beyond the range of uint8"),
+    ("bool", [True, 1], r"extra\.a\.array\.data\[1\]: expected true or false, got 1"),
+    ("float64", [0.5], r"extra\.a\.array\.shape: shape \[2\] does not hold the 1 values of data"),
+])
+def test_a_bad_array_in_a_datasets_extra_is_refused_as_it_was(dtype, data, message):
+    rec = gb.Record(np.ones(5), np.ones(5))
+    doc = json.loads(gb.to_json(gb.Dataset(rec, rec, extra={"a": np.zeros(2)})))
+    doc["object"]["extra"]["a"]["array"].update(dtype=dtype, data=data)
+    with pytest.raises(gb.GrayboxFileError, match=message):
+        gb.from_json(json.dumps(doc))

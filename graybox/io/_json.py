@@ -631,7 +631,10 @@ def _dec_plain(v: Any, where: str, rd: _Reader, depth: int = 0) -> Any:
     shape = tuple(rd.int(n, f"{at}.shape[{i}]") for i, n in enumerate(rd.list(a["shape"], f"{at}.shape")))
     kind = np.dtype(dtype).kind
     read = rd.bool if kind == "b" else rd.int if kind in "iu" else rd.float
-    data = [read(y, f"{at}.data[{i}]") for i, y in enumerate(rd.list(a["data"], f"{at}.data"))]
+    raw = rd.list(a["data"], f"{at}.data")
+    data = _plain_numbers(raw, kind)
+    if data is None:  # number by number, naming the one refused
+        data = [read(y, f"{at}.data[{i}]") for i, y in enumerate(raw)]
     if any(n < 0 for n in shape) or math.prod(shape) != len(data):
         raise rd.fail(f"{at}.shape", f"shape {list(shape)} does not hold the {len(data)} values of data")
     try:
@@ -643,6 +646,17 @@ def _dec_plain(v: Any, where: str, rd: _Reader, depth: int = 0) -> Any:
         return _read_only(values.reshape(shape))
     except ValueError as exc:
         raise rd.fail(f"{at}.shape", f"no array has the shape {reprlib.repr(list(shape))} ({exc})") from None
+
+
+def _plain_numbers(raw: list, kind: str) -> Any:
+    """A plain array's data in one conversion when every value is of its kind (as the reader would take each one:
+    float, bool, or a 64-bit integer), else None."""
+    if kind == "f":
+        return _numbers(raw, 1)
+    kinds = set(map(type, raw))
+    if kind == "b":
+        return raw if kinds <= {bool} else None
+    return raw if kinds <= {int} and (not raw or -2**63 <= min(raw) and max(raw) < 2**63) else None
 
 
 #: Per saved type, its class and its constructor's fields as (name, kind). A class whose module imports pandas at the
