@@ -124,6 +124,8 @@ def _arr(a: Any) -> Any:
     a = np.asarray(a, float)
     if a.ndim == 0:
         return _num(a)
+    if np.isfinite(a).all():  # Python floats at once, bit for bit (-0.0 too)
+        return a.tolist()
     return [_arr(r) for r in a] if a.ndim > 1 else [_num(v) for v in a]
 
 
@@ -966,7 +968,7 @@ def _dump(v: Any, level: int = 0) -> str:
         items = [f"{inner}{_text(k)}: {_dump(x, level + 1)}" for k, x in v.items()]
         return "{\n" + ",\n".join(items) + "\n" + pad + "}"
     if isinstance(v, list):
-        if all(not isinstance(x, (dict, list)) for x in v):
+        if not any(issubclass(k, (dict, list)) for k in set(map(type, v))):  # by kind: one pass in C, not per value
             return _text(v)
         return "[\n" + ",\n".join(inner + _dump(x, level + 1) for x in v) + "\n" + pad + "]"
     return _text(v)
