@@ -1356,8 +1356,9 @@ def select_graybox(
         (fronts of J_S against J_SF, D_SF). Omitted: the static points' own band
         (``StaticPoints.band``, the mean of their uncertainty δ², as :func:`graybox.se_dsf` takes it)
         when they carry one; otherwise, or with ``band=numpy.inf`` (no static requirement), a
-        black box chosen by J_S alone (static information given without a band, an uncertainty or a
-        black-box ``estimator`` is said by a :class:`SelectionWarning`: a black box was likely not meant). A gray box's structures are completed with the clusters of
+        black box chosen by J_S alone (static information given without a band, an uncertainty or
+        a black-box ``estimator`` is said by a :class:`SelectionWarning`: a black box was likely not
+        meant). A gray box's structures are completed with the clusters of
         a static curve of degree d: a curve's or surface's own, or for points the smallest degree
         whose least-squares polynomial fits them with a mean squared error within B (at most 3);
         lowered, with a :class:`SelectionWarning`, to the degree the candidates carry.
