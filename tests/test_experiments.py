@@ -988,3 +988,17 @@ def test_the_scatter_says_why_cells_with_j_0_are_not_on_its_log_axis(small_store
     near.loc[rows[0], "JSF"] = 0.0
     ax = gx.plot_scatter(near).axes[0]
     assert ax.get_yscale() == "linear" and ax.get_title().endswith(f"{finite.sum()} of {len(df)} cells drawn")
+
+
+def test_a_data_sets_band_from_points_beyond_the_float_range_names_the_points():
+    # an output scaled by 2^600 with its static δ: the band mean δ² overflowed and the grid said "band must be a finite
+    # number, got inf" about a band the user never set (hunt60c); now the data set and its δ are named
+    import graybox as gb
+    from graybox.experiments._spec import DataSpec
+
+    d = gb.load_pumping()
+    far = gb.Dataset(d.ident, d.valid, gb.StaticPoints(d.static.ubar, d.static.ybar, uncertainty=2.0 ** 600))
+    with pytest.raises(ValueError, match=r"data set 'far': the band its static points' uncertainty gives.*4\.15e\+180"
+                                         r".*band = B yourself"):
+        DataSpec(name="far", dataset=far)
+    assert DataSpec(name="near", dataset=d).band == pytest.approx(0.175 ** 2)

@@ -375,10 +375,11 @@ class DataSpec:
         if band is None and self.bundled is not None:
             band = BUNDLED[self.bundled]
         elif band is None and self.static is not None and isinstance(self.static.get("uncertainty"), float):
-            band = float(self.static["uncertainty"]) ** 2  # (a column's δ give theirs once read: band_of)
+            # (a column's δ give theirs once read: band_of)
+            band = _points_band(float(self.static["uncertainty"]) ** 2, self.static["uncertainty"], self.name)
         elif band is None and self.dataset is not None and self.dataset.static is not None \
                 and self.dataset.static.uncertainty is not None:
-            band = self.dataset.static.band
+            band = _points_band(self.dataset.static.band, max(self.dataset.static.uncertainty), self.name)
         if band is not None:
             band = _wrap(check_real, ("band",), band, "band", low=0, low_open=True)
         object.__setattr__(self, "band", band)
@@ -443,11 +444,22 @@ def _column_uncertainty(d: DataSpec) -> bool:
     return d.static is not None and isinstance(d.static.get("uncertainty"), str)
 
 
+def _points_band(band: float, delta: float, name: str) -> float:
+    """The band mean δ² the static points' uncertainty gives (output units²), or a ``ValueError`` naming the
+    data set and its δ where it leaves the float range (δ near 1e154 or 1e-162): a band the user never set must
+    not be refused as 'band must be finite' (hunt60c)."""
+    if not (0 < band < float("inf")):
+        raise ValueError(f"data set {name!r}: the band its static points' uncertainty gives, mean δ² with δ up to "
+                         f"{float(delta):.3g} (output units), is {band:g}, beyond the float range: give the data "
+                         "set's band = B yourself, or the output in other units")
+    return band
+
+
 def band_of(d: DataSpec, ds: gb.Dataset) -> float | None:
     """The band B of a data set, loaded as ``ds``: the spec's, or its static points' own when a column of
     the static file gave their δ."""
     if d.band is None and _column_uncertainty(d) and ds.static is not None and ds.static.uncertainty is not None:
-        return ds.static.band
+        return _points_band(ds.static.band, max(ds.static.uncertainty), d.name)
     return d.band
 
 
