@@ -651,10 +651,9 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks,
         splits = tuple((None, v, _block_edges(len(v), L, b, name)) for name, v in _named(valids, "validation"))
     else:
         splits = tuple((a, b, np.array([L, len(b)])) for a, b in _folds(idents, folds, L + 2))
-    if sp is not None and band is None and not black_asked and not (
-            isinstance(sp, gb.StaticPoints) and sp.uncertainty is not None):
-        # static points given, yet no band to hold a model to them and no black-box estimator named: a black box
-        # would come back unannounced
+    if sp is not None and band is None and not black_asked:
+        # static points given, yet no band to hold a model to them (none given, none carried by the points'
+        # uncertainty: _band) and no black box asked for: a black box would come back unannounced
         warn("select_graybox: static information was given but no band (band=) and no uncertainty on the points, so "
              "this search is a black box chosen by J_S alone (the static information only scores J_SF); give band=B "
              "(output units²) or StaticPoints(..., uncertainty=δ) for a gray box, or band=numpy.inf to ask for a "
