@@ -141,6 +141,19 @@ def tank_case(k: int):
     return data, bench_honest._tanks(s + 2, 1500), gb.Candidates(3, 3, degree=3), 25.0
 
 
+def scored(gt: pd.DataFrame, bt: pd.DataFrame, i: int, j: int) -> dict:
+    """The test figures of gray row ``i`` and black row ``j`` (positions): each row as text, the gray box's test J_S
+    over the black box's, each choice's regret (its test J_S over the best among the rows it was compared with: the
+    in-band ones for the gray box), and issue 26's goal."""
+    tg, tb = gt["JS_test"].to_numpy(float), bt["JS_test"].to_numpy(float)
+    inb = gt["in_band"].to_numpy(bool)
+    regret = tg[i] / tg[inb & np.isfinite(tg)].min()
+    return dict(gray=f"{gt.iloc[i]['n_terms']} {gt.iloc[i]['estimator']}",
+                black=f"{bt.iloc[j]['n_terms']} {bt.iloc[j]['estimator']}",
+                vs_black=tg[i] / tb[j], regret=regret, black_regret=tb[j] / tb[np.isfinite(tb)].min(),
+                goal=bool(tg[i] / tb[j] <= 1.1 and regret <= 1.2 and inb[i]))
+
+
 def analyse(paths: list[str], taus: list[float], rule: str = "ratio-delta") -> None:
     """The rule on dumped cases with rows slower than tau validation records left out, for each tau (0: none)."""
     out = []
@@ -153,14 +166,8 @@ def analyse(paths: list[str], taus: list[float], rule: str = "ratio-delta") -> N
             for tau in taus:
                 tau_max = tau * n_valid if tau else np.inf
                 i, j = (choose(tables[b], caps[b], rule, tau_max) for b in ("gray", "black"))
-                tg, tb = (tables[b]["JS_test"].to_numpy(float) for b in ("gray", "black"))
-                inb = tables["gray"]["in_band"].to_numpy(bool)
-                regret = tg[i] / tg[inb & np.isfinite(tg)].min()
-                out.append(dict(case=name, family=name.split(", draw")[0], tau=tau, regret=regret,
-                                black_regret=tb[j] / tb[np.isfinite(tb)].min(), vs_black=tg[i] / tb[j],
-                                goal=bool(tg[i] / tb[j] <= 1.1 and regret <= 1.2 and inb[i]),
-                                gray=f"{tables['gray']['n_terms'][i]} {tables['gray']['estimator'][i]}",
-                                black=f"{tables['black']['n_terms'][j]} {tables['black']['estimator'][j]}"))
+                out.append(dict(case=name, family=name.split(", draw")[0], tau=tau,
+                                **scored(tables["gray"], tables["black"], i, j)))
     df = pd.DataFrame(out)
     for col in ("regret", "black_regret", "vs_black"):
         t = np.exp(np.log(df[col]).groupby([df.tau, df.family]).mean()).unstack()
@@ -233,14 +240,7 @@ def main() -> None:
             (gt, gc), (bt, bc) = sel["gray"], sel["black"]
             tau_max = args.tau * len(data.valid) if args.tau else np.inf
             i, j = choose(gt, gc, rule, tau_max), choose(bt, bc, rule, tau_max)
-            test_g, test_b = gt["JS_test"].to_numpy(float), bt["JS_test"].to_numpy(float)
-            inb = gt["in_band"].to_numpy(bool)
-            regret = test_g[i] / test_g[inb & np.isfinite(test_g)].min()
-            out.append(dict(case=name, rule=rule, gray=f"{gt.iloc[i]['n_terms']} {gt.iloc[i]['estimator']}",
-                            vs_black=test_g[i] / test_b[j], regret=regret,
-                            black_regret=test_b[j] / test_b[np.isfinite(test_b)].min(),
-                            library=gc["library"],
-                            goal=bool(test_g[i] / test_b[j] <= 1.1 and regret <= 1.2 and gt.iloc[i]["in_band"])))
+            out.append(dict(case=name, rule=rule, library=gc["library"], **scored(gt, bt, i, j)))
         print(pd.DataFrame(out[-len(RULES):]).to_string(index=False), flush=True)
     df = pd.DataFrame(out)
     df["cell"] = [f"{v:.3g} ({r:.3g}){'' if g else ' ✗'}" for v, r, g in zip(df.vs_black, df.regret, df.goal)]
