@@ -431,3 +431,27 @@ def test_curve_equality_of_a_structure_with_transient_inputs_says_why_not_to_fit
     # a second input that is no transient one keeps the surface advice
     with pytest.raises(ValueError, match=r"give a StaticSurface"):
         CurveEquality(EQ1).affine(StaticContext(Structure(["y(k-1)", "u(k-1)", "v(k-1)"]), sigma_y="free"))
+
+
+def test_an_inaccurate_optimum_outside_its_band_is_refused_not_warned():
+    # OSQP stopped after 40 iterations at loose tolerances calls its answer "optimal_inaccurate": that θ missed the
+    # band ±0.01 by 0.006 (60 %) and came back with a warning; 60 iterations reach an optimum inside it
+    rng = np.random.default_rng(5)
+    u = rng.uniform(-1, 1, 400)
+    y = np.zeros(400)
+    for k in range(1, 400):
+        y[k] = 0.5 * y[k - 1] + u[k - 1] + 0.2 * u[k - 1] ** 2
+    rec = Record(u, y + 0.01 * rng.standard_normal(400))
+    structure = Structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "1"])
+    x = np.linspace(-0.8, 0.8, 4)
+    points = StaticPoints(x, 2 * x + 0.4 * x ** 2 + 0.3)  # 0.3 above the record's statics: the band binds
+    band = StaticBand(b=0.01, points=points)
+
+    def fit(iterations):
+        return pe_thetas(structure, rec, points, lambdas=[1.0], solver="osqp", constraints=band,
+                         solver_options={"max_iter": iterations, "eps_abs": 1e-3, "eps_rel": 1e-3})
+
+    with pytest.raises(InfeasibleError, match=r"inaccurate optimum .* misses the constraints \['static band"):
+        fit(40)
+    ys = Model(structure, fit(200)[0]).static_curve(x, y0=points.ybar, strict=False)
+    assert np.max(np.abs(ys - points.ybar)) <= 0.01 * (1 + 1e-3)

@@ -1009,7 +1009,8 @@ class _QP:
             cons_cp.extend(c.constraints(theta, ctx))
         self.problem = cp.Problem(cp.Minimize(obj), cons_cp)
         # the affine rows alone (in δ), to tell constraints that admit no θ from a solve that failed numerically
-        self.affine = None if rows.user else (rows.V, rows.g / sig, rows.G, rows.h / sig)
+        self.rows = (rows.V, rows.g / sig, rows.G, rows.h / sig)
+        self.affine = None if rows.user else self.rows
         # First warm start: the LS estimate (OSQP converges slowly from elsewhere when λ1 is
         # tiny); later solves start from the previous one.
         self.dy.value = np.zeros(k)
@@ -1100,10 +1101,28 @@ class _QP:
             raise _member_failure(InfeasibleError(f"solver {self.solver} returned status {st!r} with constraints "
                                                   f"{list(self.names)}"))
         if st == cp.OPTIMAL_INACCURATE:
+            self._check_inaccurate(np.array(self.dy.value, float))
             self.inaccurate.append((float(w1), float(w2)))
         if self.fixed is not None:
             return self.fixed.copy()
         return self.z_p + self.N @ (self.basis.z0 + self.sigma * (self.basis.T @ np.array(self.dy.value, float)))
+
+    def _check_inaccurate(self, dy: np.ndarray) -> None:
+        """A member's failure when an optimum the solver called inaccurate misses the affine rows by more than 1e-6 of
+        the output's spread (the rows in units of σ, each over its norm): OSQP stopped early with loose tolerances
+        returned a θ 60 % outside a static band, said only as "an inaccurate optimum"."""
+        V, g, G, h = self.rows
+        miss = np.zeros(0)
+        if V.shape[0]:
+            miss = np.abs(V @ dy - g) / np.maximum(np.linalg.norm(V, axis=1), np.finfo(float).tiny)
+        if G.shape[0]:
+            miss = np.concatenate([miss, (G @ dy - h) / np.maximum(np.linalg.norm(G, axis=1), np.finfo(float).tiny)])
+        worst = float(np.max(miss, initial=0.0))
+        if not worst <= 1e-6:  # NaN too
+            raise _member_failure(InfeasibleError(
+                f"solver {self.solver} reports an inaccurate optimum (status 'optimal_inaccurate') that misses the "
+                f"constraints {list(self.names)} by {worst * self.sigma:.3g} (output units): not taken; tighten "
+                "or leave out solver_options, or use solver='clarabel'"))
 
     def warn_inaccurate(self) -> None:
         """One warning for the whole sweep, naming the weights whose optimum the solver called inaccurate."""
@@ -1227,7 +1246,9 @@ def cls(
     solver : {"clarabel", "osqp", "closed"}
         cvxpy with Clarabel (default) or OSQP, or the KKT closed form (equalities only).
     solver_options : mapping, optional
-        Passed to ``cvxpy.Problem.solve`` (overrides graybox's tight defaults).
+        Passed to ``cvxpy.Problem.solve`` (overrides graybox's tight defaults). An optimum the solver
+        calls inaccurate is kept (with one warning) only where it meets the affine constraints to
+        1e-6 of the output's spread; else that member fails, naming them.
     name : str
         The returned model's name.
 
@@ -1726,7 +1747,9 @@ def pe_pareto(
     weights : {"mse", "sum"}
         Objective normalisation (see :func:`pe_thetas`).
     solver_options : mapping, optional
-        Passed to ``cvxpy.Problem.solve`` (overrides graybox's tight defaults).
+        Passed to ``cvxpy.Problem.solve`` (overrides graybox's tight defaults). An optimum the solver
+        calls inaccurate is kept (with one warning) only where it meets the affine constraints to
+        1e-6 of the output's spread; else that member fails, naming them.
     ubar : ndarray, optional
         Where to sample a StaticCurve (shape (K,)) or StaticSurface (shape (K, m)) given as
         ``static``, in input units.
