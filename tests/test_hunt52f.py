@@ -21,21 +21,25 @@ def _miso_files(tmp_path):
                                      encoding="utf-8")
 
 
-def test_spec_file_tables_take_units_a_units_row_of_mixed_inputs_needs(tmp_path):
-    # the loader refuses inputs of different units in a units row unless units= says which to show; a spec's file
-    # table had no units key, so such files could not be read by a grid at all
+def test_spec_file_tables_read_inputs_in_units_of_their_own(tmp_path):
+    # a units row of mixed inputs gives each input its own unit; a spec's table may say them too, one per input,
+    # and one unit for both contradicts the row
     _miso_files(tmp_path)
     rec = dict(u=["speed", "valve"], y="p", time="t", units_row=True)
-    d = DataSpec("m", ident=dict(path="id.csv", **rec, units=["rpm", "Pa"]),
-                 valid=dict(path="va.csv", **rec, units=["rpm", "Pa"]),
-                 static=dict(path="st.csv", u=["speed", "valve"], y="p", units_row=True, units=["rpm", "Pa"]))
+    each = [["rpm", "%"], "Pa"]
+    d = DataSpec("m", ident=dict(path="id.csv", **rec, units=each), valid=dict(path="va.csv", **rec, units=each),
+                 static=dict(path="st.csv", u=["speed", "valve"], y="p", units_row=True, units=each))
     ds = d.load(tmp_path)
-    assert ds.ident.units == ("rpm", "Pa") and ds.valid.units == ("rpm", "Pa") and ds.static.units == ("rpm", "Pa")
-    assert d.to_dict()["ident"]["units"] == ["rpm", "Pa"]
-    # without it the refusal names the key a spec's table takes
+    assert ds.ident.units == ds.valid.units == ds.static.units == (("rpm", "%"), "Pa")
+    assert d.to_dict()["ident"]["units"] == each
     bare = DataSpec("m", ident=dict(path="id.csv", **rec), valid=dict(path="va.csv", **rec),
                     static=dict(path="st.csv", u=["speed", "valve"], y="p", units_row=True))
     assert "units" not in bare.to_dict()["ident"]  # the canonical form of a spec without it is as before
+    assert bare.load(tmp_path).ident.units == (("rpm", "%"), "Pa")
+    one = DataSpec("m", ident=dict(path="id.csv", **rec, units=["rpm", "Pa"]), valid=dict(path="va.csv", **rec),
+                   static=dict(path="st.csv", u=["speed", "valve"], y="p", units_row=True))
+    with pytest.raises(ValueError, match=r"input 'valve' is in 'rpm', but the units row says '%'"):
+        one.load(tmp_path)
     with pytest.raises(gb.experiments.SpecError, match="units"):
         DataSpec("m", ident=dict(path="id.csv", **rec, units="rpm"), valid=dict(path="va.csv", **rec),
                  static=dict(path="st.csv", u=["speed", "valve"], y="p"))

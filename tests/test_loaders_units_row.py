@@ -43,10 +43,12 @@ def test_later_lines_keep_the_files_own_numbers(tmp_path):
 
 def test_the_units_row_is_checked(tmp_path):
     two = _write(tmp_path / "two.csv", "t,n1,n2,p\ns,rpm,V,Pa\n0.0,1000,1,2e5\n0.1,1010,2,2.01e5\n0.2,1020,3,2.02e5\n")
-    with pytest.raises(ValueError, match=r"different units \(V, rpm\).*pass units="):
-        gb.load_record_csv(two, ["n1", "n2"], "p", time="t", units_row=True)
-    assert gb.load_record_csv(two, ["n1", "n2"], "p", time="t", units_row=True, units=("rpm", "Pa")).units == (
-        "rpm", "Pa")
+    # inputs in units of their own keep one each; a units= of one unit for both contradicts the row
+    assert gb.load_record_csv(two, ["n1", "n2"], "p", time="t", units_row=True).units == (("rpm", "V"), "Pa")
+    with pytest.raises(ValueError, match=r"says the input 'n2' is in 'rpm', but the units row says 'V'"):
+        gb.load_record_csv(two, ["n1", "n2"], "p", time="t", units_row=True, units=("rpm", "Pa"))
+    assert gb.load_record_csv(two, ["n1", "n2"], "p", time="t", units_row=True,
+                              units=(("rpm", "V"), "Pa")).units == (("rpm", "V"), "Pa")
     ms = _write(tmp_path / "ms.csv", "t,speed,p\nms,rpm,Pa\n0,1000,2e5\n100,1010,2.01e5\n")
     with pytest.raises(ValueError, match="time column the unit 'ms', but time stamps are read as seconds"):
         gb.load_record_csv(ms, "speed", "p", time="t", units_row=True)

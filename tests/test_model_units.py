@@ -170,3 +170,59 @@ def test_a_dataset_speaks_in_the_units_any_of_its_parts_names():
     assert gb.els(ST, data).model.units == UNITS
     assert gb.frols(gb.Candidates(2, 2, degree=2), data, n_terms=4).model.units == UNITS
     assert data.ident.units == ("", "")  # the Dataset's own records are left as given
+
+
+def _two_inputs(units, names=("q", "T"), seed=3, n=300):
+    rng = np.random.default_rng(seed)
+    u = np.column_stack([np.repeat(rng.uniform(0, 10, n // 10), 10), np.repeat(rng.uniform(20, 60, n // 10), 10)])
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.6 * y[k - 1] + 0.1 * u[k - 1, 0] + 0.02 * u[k - 1, 1]
+    return gb.Record(u, y, Ts=2.0, units=units, input_names=names, name=f"run {seed}")
+
+
+def test_inputs_in_units_of_their_own_are_kept_shown_and_checked_input_by_input():
+    # a Record held one input unit: a flow in l/min beside a temperature in °C could not both be said
+    each = (("l/min", "°C"), "m")
+    rec = _two_inputs(each)
+    assert rec.units == each
+    assert "q in [" in repr(rec) and "] l/min, T in [" in repr(rec) and "] °C, y in" in repr(rec)
+    assert _two_inputs((["s", "s"], "m")).units == ("s", "m")  # one unit said per input is that one unit
+    with pytest.raises(ValueError, match=r"3 input units .* for 2 input"):
+        _two_inputs((("l/min", "°C", "bar"), "m"))
+    with pytest.raises(TypeError, match="units must be a pair of strings"):
+        _two_inputs(((), "m"))
+    m = gb.els(gb.Structure(["y(k-1)", "q(k-1)", "T(k-1)"]), rec).model
+    assert m.units == each
+    m.simulate(_two_inputs(each, seed=4))
+    m.simulate(_two_inputs((("l/min", ""), "m"), seed=4))  # an input whose unit is not said is not refused
+    with pytest.raises(ValueError, match=r"input 'T' unit '°C' but 'run 4' has 'K'"):
+        m.simulate(_two_inputs((("l/min", "K"), "m"), seed=4))
+    # inputs are read by name: a record with its columns the other way round, and its units with them, is the same
+    swapped = gb.Record(rec.u[:, ::-1], rec.y, Ts=2.0, units=(("°C", "l/min"), "m"), input_names=("T", "q"))
+    np.testing.assert_allclose(m.simulate(swapped), m.simulate(rec))
+    with pytest.raises(ValueError, match=r"input 'q' unit 'l/min' but 'run 4' has 'm3/h'"):
+        m.simulate(_two_inputs((("m3/h", "°C"), "m"), seed=4))
+    # one identification's data are held to each other alike, and the units said per input are merged
+    with pytest.raises(ValueError, match=r"input 'T' unit '°C' but 'run 5' has 'K'"):
+        gb.Dataset(rec, _two_inputs((("l/min", "K"), "m"), seed=5))
+    pts = gb.StaticPoints(np.array([[2.0, 30], [5, 40], [8, 50]]), np.array([6.0, 7, 8]), input_names=("q", "T"),
+                          units=(("", "°C"), "m"))
+    assert gb.Dataset(_two_inputs((("l/min", ""), "m")), _two_inputs(("", ""), seed=4), pts).units == each
+
+
+def test_inputs_in_units_of_their_own_survive_a_file_and_label_the_plots(tmp_path):
+    each = (("l/min", "°C"), "m")
+    rec = _two_inputs(each)
+    m = gb.els(gb.Structure(["y(k-1)", "q(k-1)", "T(k-1)"]), rec).model
+    for value in (rec, m):
+        path = tmp_path / f"{type(value).__name__}.json"
+        gb.save(value, path)
+        assert gb.load(path).units == each
+        assert gb.read_header(path)["units"] == each
+    fig = gb.plots.plot_record(rec)
+    assert [t.get_text() for t in fig.axes[0].get_legend().get_texts()] == ["q (l/min)", "T (°C)"]
+    assert fig.axes[0].get_ylabel() == "input"  # no one unit to name on the shared axis
+    pts = gb.StaticPoints(np.array([[2.0, 0.0], [5, 0.0], [8, 0.0]]), np.array([6.0, 7, 8]), input_names=("q", "T"),
+                          units=each)
+    assert gb.plots.plot_static_curve(pts).axes[0].get_xlabel() == "input q (l/min)"

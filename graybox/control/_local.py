@@ -195,9 +195,9 @@ class LocalModel(Relocked):
     input_names : tuple of str
     name : str
         Label (the model's name).
-    units : (str, str)
-        The model's units of (u, y) (:attr:`graybox.Model.units`): ``b`` and the gains hold in them. Empty:
-        not said.
+    units : tuple
+        The model's units of (u, y) (:attr:`graybox.Model.units`; the input's one str, or one per input): ``b``
+        and the gains hold in them. Empty: not said.
     """
 
     ubar: np.ndarray
@@ -209,13 +209,13 @@ class LocalModel(Relocked):
     Ts: float
     input_names: tuple[str, ...]
     name: str = ""
-    units: tuple[str, str] = ("", "")
+    units: tuple[str | tuple[str, ...], str] = ("", "")
 
     def __post_init__(self) -> None:
         # types, then what the fields say of each other (a file loads through here: graybox.io)
         check_fields(self)
-        object.__setattr__(self, "units", check_units(self.units, "LocalModel"))
         m = len(check_input_names(self.input_names, what="LocalModel: input_names"))
+        object.__setattr__(self, "units", check_units(self.units, "LocalModel", m))
         # numbers only: numpy's conversion parsed text, read True as 1 and None as NaN (a file's or a caller's fields)
         ubar = np.ravel(real_array(self.ubar, "LocalModel: ubar"))
         a, b = real_array(self.a, "LocalModel: a"), real_array(self.b, "LocalModel: b")
@@ -661,7 +661,7 @@ def _range_warning(model: Model, ub: np.ndarray, data: object) -> None:
     # period is checked by check_Ts, and only when the model's own is taken)
     for r in [*recs, *([] if static is None else [static])]:
         check_same_units(model.units, f"model {model.name!r} was identified with", r,
-                         "its parameters hold in those units only; convert the data")
+                         "its parameters hold in those units only; convert the data", model.input_names)
     # each input by name, in the model's order (the data's columns may be in another, and a record
     # may hold inputs the model does not use, one input included)
     names = model.input_names

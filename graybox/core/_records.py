@@ -334,8 +334,9 @@ class Record(Relocked):
         Sampling period in seconds (default 1.0).
     name : str, optional
         A label used in messages and tables.
-    units : tuple of str, optional
-        Units of ``(u, y)``, e.g. ``("rpm", "mlc")``: shown in reprs and on plots, and checked: the data of one
+    units : tuple, optional
+        Units of ``(u, y)``, e.g. ``("rpm", "mlc")``; with several inputs in different units, one per input:
+        ``(("l/min", "°C"), "m")``. Shown in reprs and on plots, and checked: the data of one
         identification must name the same ones, and a model fitted on them refuses a record or static points
         that name others (``""``, the default, names none and is never refused).
     input_names : sequence of str, optional
@@ -347,7 +348,7 @@ class Record(Relocked):
     y: np.ndarray
     Ts: float = 1.0
     name: str = "record"
-    units: tuple[str, str] = ("", "")
+    units: tuple[str | tuple[str, ...], str] = ("", "")
     input_names: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
@@ -368,8 +369,8 @@ class Record(Relocked):
                             "Ts=float(np.median(np.diff(t))), or read the file with graybox.load_record_csv(path, "
                             "u=..., y=..., time='t')")
         object.__setattr__(self, "Ts", check_real(self.Ts, f"{self.name}: Ts (seconds)", low=0, low_open=True))
-        object.__setattr__(self, "units", check_units(self.units, self.name))
         m = 1 if u.ndim == 1 else u.shape[1]
+        object.__setattr__(self, "units", check_units(self.units, self.name, m))
         names = default_input_names(m) if self.input_names is None else check_input_names(
             self.input_names, m, f"{self.name}: input_names")
         object.__setattr__(self, "u", u)
@@ -400,8 +401,7 @@ class Record(Relocked):
         if self.u.ndim == 1 and self.input_names == ("u",):
             ins = f"u in {range_text(self.u.min(), self.u.max())}{uu}"
         else:
-            ins = ", ".join(f"{n} in {range_text(c.min(), c.max())}" for n, c in zip(self.input_names, self.inputs.T))
-            ins += uu
+            ins = _input_ranges(self.input_names, self.inputs.T, self.units)
         return f"Record({self.name!r}: {len(self)} samples, Ts = {self.Ts:g} s, {ins}, y in {range_text(self.y.min(), self.y.max())}{yu})"
 
     @property
@@ -449,8 +449,9 @@ class StaticPoints(Relocked):
         transmitter's ±0.175 mlc); one number for every point or one per point, each > 0. When
         given, it supplies the bands that otherwise must be passed: D_SF's B (:attr:`band`) and
         :class:`~graybox.StaticBand`'s half-widths. None (default): every band must be given.
-    units : tuple of str, optional
-        Units of ``(ubar, ybar)``, as :class:`Record`'s ``units``: shown (plots label their axes with
+    units : tuple, optional
+        Units of ``(ubar, ybar)``, as :class:`Record`'s ``units`` (the input's one string, or one per
+        input): shown (plots label their axes with
         them) and checked against the records' and a model's; default ``("", "")``, no unit said.
     """
 
@@ -459,7 +460,7 @@ class StaticPoints(Relocked):
     name: str = "static points"
     input_names: tuple[str, ...] | None = None
     uncertainty: np.ndarray | None = None
-    units: tuple[str, str] = ("", "")
+    units: tuple[str | tuple[str, ...], str] = ("", "")
 
     def __post_init__(self) -> None:
         check_str(self.name, "StaticPoints: name")
@@ -479,7 +480,7 @@ class StaticPoints(Relocked):
         object.__setattr__(self, "ubar", u)
         object.__setattr__(self, "ybar", y)
         object.__setattr__(self, "input_names", names)
-        object.__setattr__(self, "units", check_units(self.units, self.name))
+        object.__setattr__(self, "units", check_units(self.units, self.name, m))
         if self.uncertainty is not None:
             d = locked(_uncertainty(self.uncertainty, y.size, self.name, "point"))
             object.__setattr__(self, "uncertainty", d)
@@ -511,7 +512,7 @@ class StaticPoints(Relocked):
     @classmethod
     def from_repeats(cls, ubar: object, ybar: object, *, name: str = "static points",
                      input_names: Sequence[str] | None = None, uncertainty: object = None,
-                     units: tuple[str, str] = ("", "")) -> "StaticPoints":
+                     units: tuple[str | tuple[str, ...], str] = ("", "")) -> "StaticPoints":
         """Static points from repeated measurements: the mean ȳ at each distinct ū.
 
         Parameters
@@ -568,16 +569,16 @@ class StaticPoints(Relocked):
         return 1 if self.ubar.ndim == 1 else int(self.ubar.shape[1])
 
     def __repr__(self) -> str:
-        if self.ubar.ndim == 1:
-            ins = f"ū in {range_text(self.ubar.min(), self.ubar.max())}"
-        else:
-            ins = ", ".join(f"{n} in {range_text(c.min(), c.max())}" for n, c in zip(self.input_names, self.ubar.T))
         uu, yu = _unit_suffixes(self.units)
+        if self.ubar.ndim == 1:
+            ins = f"ū in {range_text(self.ubar.min(), self.ubar.max())}{uu}"
+        else:
+            ins = _input_ranges(self.input_names, self.ubar.T, self.units)
         # δ per point from a file's column: its range, so that one number never stands for them all
         lo, hi = (None, None) if self.uncertainty is None else (np.min(self.uncertainty), np.max(self.uncertainty))
         unc = ("" if lo is None else f", ±{hi:.4g}{yu}" if f"{lo:.4g}" == f"{hi:.4g}"
                else f", ±{lo:.4g}–{hi:.4g}{yu}")
-        return (f"StaticPoints({self.name!r}: {len(self)} points, {ins}{uu}, ȳ in "
+        return (f"StaticPoints({self.name!r}: {len(self)} points, {ins}, ȳ in "
                 f"{range_text(self.ybar.min(), self.ybar.max())}{yu}{unc})")
 
 
@@ -599,18 +600,57 @@ def require_lengths(records: Sequence[Any], max_lag: int, *, prefix: str = "", w
         r.require_length(max_lag)
 
 
-def check_units(units: object, name: str) -> tuple[str, str]:
-    """``units`` as a pair (input unit, output unit) of str, stripped of surrounding blanks (a CSV header's
-    ``" rpm "`` is the unit ``"rpm"``: units are compared, and blanks would make two of one unit), or ``TypeError``
-    naming ``name``."""
-    if not (isinstance(units, (tuple, list)) and len(units) == 2 and all(isinstance(x, str) for x in units)):
-        raise TypeError(f"{name}: units must be a pair of strings (input unit, output unit), got {units!r}")
-    return (units[0].strip(), units[1].strip())
+def check_units(units: object, name: str, m: int | None = None) -> tuple[str | tuple[str, ...], str]:
+    """``units`` as a pair (input unit, output unit), or ``TypeError`` / ``ValueError`` naming ``name``.
+
+    The input unit is one str for every input, or a sequence of str, one per input (``("l/min", "°C")`` for a flow
+    and a temperature), kept as a tuple; a sequence whose units are all one is that one str, so two spellings of
+    the same units compare equal. Each unit is stripped of surrounding blanks (a CSV header's ``" rpm "`` is the
+    unit ``"rpm"``: units are compared, and blanks would make two of one unit). ``m``, where known, is the number of
+    inputs a sequence must give (``ValueError`` otherwise)."""
+    pair = isinstance(units, (tuple, list)) and len(units) == 2 and isinstance(units[1], str)
+    ins = units[0] if pair else None  # type: ignore[index]
+    per_input = isinstance(ins, (tuple, list)) and len(ins) > 0 and all(isinstance(x, str) for x in ins)
+    if not pair or not (isinstance(ins, str) or per_input):
+        raise TypeError(f"{name}: units must be a pair of strings (input unit, output unit), the input's one string "
+                        f"or one string per input, got {units!r}")
+    out = units[1].strip()  # type: ignore[index]
+    if isinstance(ins, str):
+        return (ins.strip(), out)
+    each = tuple(x.strip() for x in ins)  # type: ignore[union-attr]
+    if m is not None and len(each) != m:
+        raise ValueError(f"{name}: units give {len(each)} input units {each} for {m} input(s): one per input, or "
+                         "one string for all")
+    return (each[0] if len(set(each)) == 1 else each, out)
 
 
-def _unit_suffixes(units: tuple[str, str]) -> tuple[str, str]:
-    """`` unit`` after a value for each of (input, output), empty where no unit is said."""
-    return (f" {units[0]}" if units[0] else "", f" {units[1]}" if units[1] else "")
+def input_unit(units: tuple[str | tuple[str, ...], str], j: int = 0) -> str:
+    """The unit of input ``j`` (position among the inputs) in ``units`` (:func:`check_units`' form); ``""``: none
+    said."""
+    u = units[0]
+    return u if isinstance(u, str) else u[j]
+
+
+def input_unit_text(units: tuple[str | tuple[str, ...], str]) -> str:
+    """The input unit as text: the one unit, or the inputs' units joined by commas (``"l/min, °C"``)."""
+    u = units[0]
+    return u if isinstance(u, str) else ", ".join(x or "(none)" for x in u)
+
+
+def _unit_suffixes(units: tuple[str | tuple[str, ...], str]) -> tuple[str, str]:
+    """`` unit`` after a value for each of (input, output), empty where no unit is said (the inputs' own units,
+    each after its range, are :func:`_input_ranges`')."""
+    u = input_unit_text(units) if isinstance(units[0], str) else ""
+    return (f" {u}" if u else "", f" {units[1]}" if units[1] else "")
+
+
+def _input_ranges(names: Sequence[str], columns: np.ndarray, units: tuple[str | tuple[str, ...], str]) -> str:
+    """``"u1 in [a, b], u2 in [c, d] °C"``: each input's range, followed by its own unit where the inputs' units
+    differ, else the one unit once at the end."""
+    per = not isinstance(units[0], str)
+    text = ", ".join(f"{n} in {range_text(c.min(), c.max())}" + (f" {input_unit(units, j)}" if per and
+                     input_unit(units, j) else "") for j, (n, c) in enumerate(zip(names, columns)))
+    return text + _unit_suffixes(units)[0]
 
 
 def _uncertainty(value: object, n: int, name: str, each: str) -> np.ndarray:
@@ -660,7 +700,8 @@ def check_compatible(a: object, b: object) -> None:
         raise ValueError(f"{a.name!r} has inputs {a.input_names} but {b.name!r} has inputs {b.input_names}: "  # type: ignore[attr-defined]
                          "all data of one identification must have the same inputs, in the same order"
                          + _unnamed_hint(a, b))
-    check_same_units(getattr(a, "units", ("", "")), f"{a.name!r} has", b, _SAME_UNITS)  # type: ignore[attr-defined]
+    first: Any = a
+    check_same_units(getattr(a, "units", ("", "")), f"{first.name!r} has", b, _SAME_UNITS, first.input_names)
     if isinstance(a, Record) and isinstance(b, Record):
         check_same_period(a, b)
 
@@ -679,25 +720,28 @@ def _unnamed_hint(a: Any, b: Any) -> str:
 
 
 def check_units_agree(items: Sequence[object], advice: str) -> None:
-    """``ValueError`` naming both when two of ``items`` (records, static points) name different units for the input
-    or the output: each is held to the first that names one, not to the first item only (an empty unit says
-    nothing, so holding all to a first that names none would let the others disagree). ``advice`` ends the
-    message."""
-    for i, kind in enumerate(("input", "output")):
-        named = [x for x in items if getattr(x, "units", ("", ""))[i]]
-        for x in named[1:]:
-            if x.units[i] != named[0].units[i]:  # type: ignore[attr-defined]
-                raise ValueError(f"{named[0].name!r} has {kind} unit {named[0].units[i]!r} but {x.name!r} has "  # type: ignore[attr-defined]
-                                 f"{x.units[i]!r}: " + advice)  # type: ignore[attr-defined]
+    """``ValueError`` naming both when two of ``items`` (records, static points) name different units for an input
+    or the output: each is held to every earlier one where both name a unit (an empty unit says nothing, so holding
+    all to a first that names none would let the others disagree). ``advice`` ends the message."""
+    for i, x in enumerate(items):
+        for first in items[:i]:
+            name = getattr(first, "name", "")
+            check_same_units(getattr(first, "units", ("", "")), f"{name!r} has", x, advice,
+                             getattr(first, "input_names", None))
 
 
-def said_units(records: object, static: object = None) -> tuple[str, str]:
+def said_units(records: object, static: object = None) -> tuple[str | tuple[str, ...], str]:
     """The units a fit's records (a Record, a DaskRecord or a sequence of them) and static points say together:
-    per slot the first named, as one record may name a unit the others leave empty (where two name one they agree:
-    :func:`check_compatible`)."""
+    per slot the first named (per input where the inputs have units of their own), as one record may name a unit
+    the others leave empty (where two name one they agree: :func:`check_compatible`)."""
     said = [getattr(r, "units", ("", "")) for r in (records if isinstance(records, (list, tuple)) else [records])]
     said += [static.units] if isinstance(static, StaticPoints) else []
-    return (next((u[0] for u in said if u[0]), ""), next((u[1] for u in said if u[1]), ""))
+    out = next((u[1] for u in said if u[1]), "")
+    per = [u[0] for u in said if not isinstance(u[0], str)]
+    if not per:
+        return (next((u[0] for u in said if u[0]), ""), out)
+    each = [next((input_unit(u, j) for u in said if input_unit(u, j)), "") for j in range(len(per[0]))]
+    return check_units((each, out), "units")
 
 
 def carried_from(records: object, static: object = None) -> dict:
@@ -710,15 +754,45 @@ def carried_from(records: object, static: object = None) -> dict:
             "units": said_units(records, static)}
 
 
-def check_same_units(units: tuple[str, str], what: str, other: object, advice: str) -> None:
+def _input_clash(units: tuple, names: Sequence[str] | None, theirs: tuple, their_names: Sequence[str] | None
+                 ) -> tuple[str, str, str] | None:
+    """(what, mine, theirs) of the first input unit two sides both name and name differently, or None: one unit
+    each, compared; else input by input: by name where both sides' names are known (inputs are read by name, and a
+    record may hold inputs a model does not use), else by position; what is ``"input"`` or ``"input 'name'"``."""
+    a, b = units[0], theirs[0]
+    if isinstance(a, str) and isinstance(b, str):
+        return ("input", a, b) if a and b and a != b else None
+
+    def of(u: str | tuple[str, ...], j: int) -> str:
+        return u if isinstance(u, str) else (u[j] if j < len(u) else "")
+
+    n_a = len(a) if not isinstance(a, str) else len(names) if names is not None else len(b)
+    known = names is not None and their_names is not None and len(names) == n_a
+    for j in range(n_a):
+        if known:
+            if names[j] not in their_names:  # type: ignore[index, operator]
+                continue
+            k, what = list(their_names).index(names[j]), f"input {names[j]!r}"  # type: ignore[arg-type, index]
+        else:
+            k, what = j, f"input {j + 1}"
+        x, y = of(a, j), of(b, k)
+        if x and y and x != y:
+            return (what, x, y)
+    return None
+
+
+def check_same_units(units: tuple, what: str, other: object, advice: str,
+                     names: Sequence[str] | None = None) -> None:
     """``ValueError`` when ``other``'s units (a Record's or StaticPoints') differ from ``units`` where both
-    name them (an empty unit says nothing). ``what`` names the first side, e.g. "'ident' has" or "model 'ELS'
-    was identified with"; ``advice`` ends the message."""
-    theirs = getattr(other, "units", ("", ""))
-    for i, kind in enumerate(("input", "output")):
-        if units[i] and theirs[i] and units[i] != theirs[i]:
-            raise ValueError(f"{what} {kind} unit {units[i]!r} but {other.name!r} has {theirs[i]!r}: "  # type: ignore[attr-defined]
-                             + advice)
+    name them (an empty unit says nothing; inputs in units of their own are compared input by input, by name
+    where ``names``, the first side's input names, are given). ``what`` names the first side, e.g. "'ident' has"
+    or "model 'ELS' was identified with"; ``advice`` ends the message."""
+    theirs, who = getattr(other, "units", ("", "")), getattr(other, "name", "")
+    clash = _input_clash(units, names, theirs, getattr(other, "input_names", None))
+    if clash is not None:
+        raise ValueError(f"{what} {clash[0]} unit {clash[1]!r} but {who!r} has {clash[2]!r}: " + advice)
+    if units[1] and theirs[1] and units[1] != theirs[1]:
+        raise ValueError(f"{what} output unit {units[1]!r} but {who!r} has {theirs[1]!r}: " + advice)
 
 
 #: Relative difference of two sampling periods taken as one period: a period read from printed time
@@ -752,17 +826,19 @@ def check_alike(a: Record | Sequence[Record], b: Record) -> None:
     for r in recs:  # each, not the first alone: the fitting records' periods may differ within the tolerance
         check_same_period(r, b)
     for r in recs:  # the first that names a unit b contradicts is the one named
-        check_same_units(r.units, f"{r.name!r} has", b, "convert one of them: a model holds in one set of units")
+        check_same_units(r.units, f"{r.name!r} has", b, "convert one of them: a model holds in one set of units",
+                         r.input_names)
 
 
-def check_fitted_on(Ts: float | None, units: tuple[str, str], who: str, data: object, advice: str) -> None:
+def check_fitted_on(Ts: float | None, units: tuple, who: str, data: object, advice: str,
+                    names: Sequence[str] | None = None) -> None:
     """``ValueError`` when ``data`` (a Record, or static points) cannot be met by what was fitted at period ``Ts``
     in ``units``: a Record at another period, or data in other units where both name them. ``who`` says what was
     fitted and how, e.g. "model 'ELS' was identified" (the message goes on "on records sampled …" or "with …");
     ``advice`` ends a units message."""
     if isinstance(data, Record):  # static points have no period
         check_period(Ts, f"{who} on records sampled", data)
-    check_same_units(units, f"{who} with", data, advice)
+    check_same_units(units, f"{who} with", data, advice, names)
 
 
 def check_period(Ts: float | None, what: str, record: Record, advice: str = "") -> None:

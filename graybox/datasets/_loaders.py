@@ -43,7 +43,7 @@ import numpy as np
 from ..static._curves import StaticCurve
 from ..core._files import bom_encoding
 from ..core._reprs import exact_text
-from ..core._records import Dataset, Record, StaticPoints, check_same_period, check_units
+from ..core._records import Dataset, Record, StaticPoints, check_same_period, check_units, input_unit
 from ..core._terms import check_input_names
 from ..core._validation import (check_bool, check_choice, check_int, check_ordered, check_path, check_real,
                                 check_str)
@@ -447,23 +447,26 @@ def _unbracket(cell: str) -> str:
     return c if m is None else (m.group(1) if m.group(1) is not None else m.group(2)).strip()
 
 
-def _units_from_row(p: Path, units: tuple[str, str], row: dict[str, str], inputs: Sequence[str],
-                    time: str | None) -> tuple[str, str]:
-    """The (input, output) units a units row gives, checked against ``units`` given too; a time column's
-    unit must be seconds."""
+def _units_from_row(p: Path, units: tuple, row: dict[str, str], inputs: Sequence[str],
+                    time: str | None) -> tuple:
+    """The (input, output) units a units row gives (the inputs' one unit, or one per input where they differ),
+    checked against ``units`` given too; a time column's unit must be seconds."""
     # "TS": a TOA5 file's TIMESTAMP, dates and times
     if time is not None and row.get("time", "").lower() not in ("", "s", "sec", "secs", "second", "seconds", "ts"):
         raise ValueError(f"{p}: the units row gives the time column the unit {row['time']!r}, but time stamps are "
                          "read as seconds: convert the column to seconds, or leave time= out and give Ts= in seconds")
-    said = {row[r] for r in inputs if row[r]}
-    if len(said) > 1 and not units[0]:
-        raise ValueError(f"{p}: the units row gives the inputs different units ({', '.join(sorted(said))}); graybox "
-                         "holds one input unit per record: pass units=(input unit, output unit) to say which to show")
-    found = (said.pop() if len(said) == 1 else "", row["y"])
-    for k, (given, read) in enumerate(zip(units, found)):
+    each = tuple(row[r] for r in inputs)
+    said = {x for x in each if x}
+    # one unit for the inputs (those the row leaves blank say nothing), else one per input, in the inputs' order
+    found = check_units(((said.pop() if len(said) == 1 else "") if len(said) <= 1 else each, row["y"]), f"{p}")
+    for k in range(len(inputs)):
+        given, read = input_unit(units, k), input_unit(found, k)
         if given and read and given != read:
-            raise ValueError(f"{p}: units={units!r} says the {('input', 'output')[k]} is in {given!r}, but the units "
-                             f"row says {read!r}")
+            what = inputs[k] if inputs[k] != "u" else "input"  # a role: "u", or "input 'name'" of several
+            raise ValueError(f"{p}: units={units!r} says the {what} is in {given!r}, but the units row says {read!r}")
+    if units[1] and found[1] and units[1] != found[1]:
+        raise ValueError(f"{p}: units={units!r} says the output is in {units[1]!r}, but the units row says "
+                         f"{found[1]!r}")
     return (units[0] or found[0], units[1] or found[1])
 
 
@@ -1110,9 +1113,9 @@ def load_record_csv(
         they must agree within ``time_rtol``, and the record's period is ``Ts``.
     name : str, optional
         Record name (default: the file name without extension).
-    units : (str, str)
-        Units of (u, y), as a :class:`~graybox.Record`'s: shown, and checked against the other data's
-        and a model's (default none said).
+    units : tuple
+        Units of (u, y), as a :class:`~graybox.Record`'s (the inputs' one str, or one per input): shown,
+        and checked against the other data's and a model's (default none said).
     time_rtol : float
         Relative tolerance on the time steps (default 1e-3: stamps printed with few digits pass,
         a logger's jitter or a missing sample does not).
@@ -1145,8 +1148,8 @@ def load_record_csv(
     units_row : bool, optional
         The line after the column names (blank lines passed over) gives each column's unit
         (``s;rpm;Pa``, brackets allowed),
-        as data loggers write: it becomes the record's ``units`` (the inputs must share one unit
-        unless ``units=`` says which to show; a ``units=`` that contradicts it is refused; a time
+        as data loggers write: it becomes the record's ``units`` (inputs in units of their own keep
+        one each, ``(("rpm", "%"), "Pa")``; a ``units=`` that contradicts it is refused; a time
         column must be in seconds). Without it such a line is refused, naming this option. Default
         False, True for a TOA5 file (where ``False`` is refused).
 
@@ -1644,9 +1647,9 @@ def load_static_csv(
     skiprows : int, optional
         Lines before the column names that are not read (as in :func:`load_record_csv`; default 0,
         1 for a TOA5 file).
-    units : (str, str)
-        Units of (ū, ȳ), as a :class:`~graybox.Record`'s: shown (plots label their axes with them) and
-        checked against the records' and a model's; default none said.
+    units : tuple
+        Units of (ū, ȳ), as a :class:`~graybox.Record`'s (the inputs' one str, or one per input): shown
+        (plots label their axes with them) and checked against the records' and a model's; default none said.
     units_row : bool, optional
         The line after the column names gives each column's unit (as in :func:`load_record_csv`;
         default False, True for a TOA5 file); an

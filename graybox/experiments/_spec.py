@@ -281,7 +281,8 @@ def _file_entry(d: object, keys: tuple[str, ...], what: str, path: tuple) -> dic
     if d.get("units_row") is not None:
         out["units_row"] = _wrap(check_bool, path + ("units_row",), d["units_row"], "units_row")
     if d.get("units") is not None:  # absent: the canonical form is as before
-        out["units"] = list(_wrap(check_units, path + ("units",), d["units"], "units"))
+        u, y = _wrap(check_units, path + ("units",), d["units"], "units")
+        out["units"] = [u if isinstance(u, str) else list(u), y]  # a TOML/JSON array: the inputs' one or each
     if "time_rtol" in keys and d.get("time_rtol") is not None:
         out["time_rtol"] = _wrap(check_real, path + ("time_rtol",), d["time_rtol"], "time_rtol", low=0, high=1,
                                  low_open=True, high_open=True)
@@ -323,8 +324,8 @@ class DataSpec:
         CSV records ``{"path", "u", "y", "time" or "Ts"}`` and optionally ``input_names``,
         ``time_rtol``, ``delimiter``, ``decimal``, ``encoding``, ``skiprows``, ``units_row``, ``units`` (see
         :func:`graybox.load_record_csv`; ``u`` a column name, or a list of them for several inputs;
-        ``units = ["rpm", "Pa"]`` the (input, output) units, which say which to show when a units row gives
-        the inputs different ones;
+        ``units = ["rpm", "Pa"]`` the (input, output) units, or ``units = [["rpm", "%"], "Pa"]`` one per
+        input (checked against a units row, where one is read);
         ``input_names`` the names terms use for them, needed when the column names are not
         identifiers, e.g. ``"speed [rpm]"``); relative paths are resolved against the spec file's folder.
     static : mapping, optional

@@ -79,7 +79,7 @@ from ..estimation._neural import NeuralFit, NeuralModel
 from ..estimation._pareto import ParetoSet
 from ..estimation._epsilon_constraint import DSFResult
 from ..selection._forward_regression import Selection
-from ..core._records import Dataset, Record, RecordPrint, StaticPoints, check_units, record_print
+from ..core._records import Dataset, Record, RecordPrint, StaticPoints, check_units, input_unit, record_print
 from ..core._files import bom_encoding, write_atomically
 from ..core._validation import MAX_NESTING, FrozenMap, check_path, locked
 from ..core._version import graybox_version
@@ -264,6 +264,8 @@ def _enc(kind: str, v: Any, where: str = "") -> Any:
         return [[str(t) for t in x] for x in v]
     if kind == "names":
         return [str(n) for n in v]
+    if kind == "units":  # (input unit, output unit); the input's a str, or a list of one per input
+        return [v[0] if isinstance(v[0], str) else [str(x) for x in v[0]], str(v[1])]
     if kind == "arrays":
         return [_arr(a) for a in v]
     if kind == "dict_arrays":
@@ -344,6 +346,8 @@ def _dec(kind: str, v: Any, where: str, rd: _Reader) -> Any:
         return tuple(rd.structure(x, f"{where}[{i}]") for i, x in enumerate(rd.list(v, where)))
     if kind == "names":
         return tuple(rd.str(n, f"{where}[{i}]") for i, n in enumerate(rd.list(v, where)))
+    if kind == "units":
+        return _read_units(rd, v, where)
     if kind == "arrays":
         return tuple(rd.array(a, f"{where}[{i}]", 1) for i, a in enumerate(rd.list(v, where)))
     if kind == "dict_arrays":
@@ -666,27 +670,27 @@ def _plain_numbers(raw: list, kind: str) -> Any:
 #: value of it is written (then already imported): ``gb.save(model)`` in a fresh process loads no pandas (~0.3 s).
 _CODECS: dict[str, tuple[type | str, tuple[tuple[str, str], ...]]] = {
     "StaticPoints": (StaticPoints, (("ubar", "inputs"), ("ybar", "array1"), ("name", "str"), ("input_names", "names"),
-                                    ("uncertainty", "array1_or_none"), ("units", "names"))),
+                                    ("uncertainty", "array1_or_none"), ("units", "units"))),
     "StaticCurve": (StaticCurve, (("coefficients", "array1"), ("domain", "floats_or_none"), ("name", "str"))),
     "StaticSurface": (StaticSurface, (("exponents", "exponents"), ("coefficients", "array1"), ("domain", "pairs_or_none"),
                                       ("name", "str"), ("input_names", "names"))),
     "Model": (Model, (("name", "str"), ("structure", "structure"), ("theta", "array1"),
                       ("noise_structure", "structure"), ("noise_theta", "array1"), ("input_names", "names"),
-                      ("Ts", "float_or_none"), ("units", "names"))),
+                      ("Ts", "float_or_none"), ("units", "units"))),
     "NeuralModel": (NeuralModel, (("name", "str"), ("ny", "int"), ("nu", "int"), ("ne", "int"), ("W1", "array2"),
                                   ("b1", "array1"), ("w2", "array1"), ("b2", "float"), ("u_offset", "float"),
                                   ("u_scale", "float"), ("y_offset", "float"), ("y_scale", "float"),
-                                  ("input_names", "names"), ("Ts", "float_or_none"), ("units", "names"))),
+                                  ("input_names", "names"), ("Ts", "float_or_none"), ("units", "units"))),
     "ParetoSet": (ParetoSet, (("method", "str"), ("structure", "structure"), ("lambdas", "array1"),
                               ("thetas", "array2"), ("J1", "array1"), ("JS", "array1"), ("JSF", "array1"),
                               ("extra", "dict_arrays"), ("failures", "failures"), ("input_names", "names"),
-                              ("Ts", "float_or_none"), ("units", "names"), ("fitted_on", "prints"))),
+                              ("Ts", "float_or_none"), ("units", "units"), ("fitted_on", "prints"))),
     "Selection": (Selection, (("structure", "structure"), ("err", "array1"), ("theta", "array1"),
                               ("noise", "structure"), ("evaluated", "structure"), ("err_evaluated", "array1"),
                               ("rss", "array1"), ("criterion", "str"), ("criterion_curve", "array1"), ("stop", "str"),
                               ("n_rows", "int"), ("n_candidates", "int"), ("skipped", "skipped"), ("search", "str"),
                               ("subsets", "structures"), ("subset_rss", "array1"), ("input_names", "names"),
-                              ("Ts", "float_or_none"), ("units", "names"))),
+                              ("Ts", "float_or_none"), ("units", "units"))),
     "ELSResult": (ELSResult, (("model", "Model"), ("n_iter", "int"), ("converged", "bool"), ("history", "floats"),
                               ("theta_ls", "array1"), ("residuals", "arrays"), ("n_direct", "int"))),
     "NeuralFit": (NeuralFit, (("model", "NeuralModel"), ("prediction_cost", "floats"), ("simulation_cost", "floats"),
@@ -697,7 +701,7 @@ _CODECS: dict[str, tuple[type | str, tuple[tuple[str, str], ...]]] = {
     "SEMPResult": ("graybox.selection._simulation_error_pruning",
                    (("structure", "structure"), ("theta", "array1"), ("score", "float"), ("path", "frame"),
                     ("forward_scores", "frame"), ("criterion", "str"), ("stop", "str"), ("n_rows", "int"),
-                    ("input_names", "names"), ("Ts", "float_or_none"), ("units", "names"))),
+                    ("input_names", "names"), ("Ts", "float_or_none"), ("units", "units"))),
     "DSFResult": (DSFResult, (("model", "Model"), ("JS", "float"), ("JSF", "float"), ("band", "float"),
                               ("in_band", "bool"), ("start", "str"), ("start_JS", "float"), ("start_JSF", "float"),
                               ("n_iter", "int"), ("message", "str"), ("margin", "float"))),
@@ -712,15 +716,15 @@ _CODECS: dict[str, tuple[type | str, tuple[tuple[str, str], ...]]] = {
                                           ("n_samples", "int"), ("ubar", "array1"), ("ybar", "array1"),
                                           ("ybar_low", "array1"), ("ybar_high", "array1"), ("ybar_std", "array1"),
                                           ("gain", "array1"), ("gain_low", "array1"), ("gain_high", "array1"),
-                                          ("gain_std", "array1"), ("undefined", "array1"), ("units", "names"))),
+                                          ("gain_std", "array1"), ("undefined", "array1"), ("units", "units"))),
     "SimulationBand": (SimulationBand, (("model_name", "str"), ("record_name", "str"), ("method", "str"),
                                         ("level", "float"), ("n_samples", "int"), ("diverged", "float"),
-                                        ("units", "names"), ("t", "array1"), ("y", "array1"), ("yhat", "array1"),
+                                        ("units", "units"), ("t", "array1"), ("y", "array1"), ("yhat", "array1"),
                                         ("low", "array1"), ("high", "array1"), ("std", "array1"))),
     "CLSResult": (CLSResult, (("model", "Model"), ("static", "static_or_none"), ("constraints", "names"), ("solver", "str"))),
     "LocalModel": (LocalModel, (("ubar", "array1"), ("ybar", "float_or_none"), ("status", "str"), ("reason", "str"),
                                 ("a", "array1"), ("b", "array2"), ("Ts", "float"), ("input_names", "names"), ("name", "str"),
-                                ("units", "names"))),
+                                ("units", "units"))),
     "OperatingCurve": (OperatingCurve, (("local_models", "local_models"), ("ubar", "inputs"), ("ybar", "array1"),
                                         ("gain", "inputs"), ("time_constant", "array1"), ("damping", "array1"),
                                         ("spectral_radius", "array1"), ("settling_time", "array1"), ("status", "names"),
@@ -733,7 +737,7 @@ _CODECS: dict[str, tuple[type | str, tuple[tuple[str, str], ...]]] = {
                                               ("gain", "array2"), ("gain_low", "array2"), ("gain_high", "array2"),
                                               ("gain_std", "array2"), ("level", "float"), ("method", "str"),
                                               ("n_samples", "int"), ("undefined", "array1"), ("model_name", "str"),
-                                              ("units", "names"))),
+                                              ("units", "units"))),
     "CorrelationTest": (CorrelationTest, (("name", "str"), ("label", "str"), ("kind", "str"), ("lags", "int_array1"),
                                           ("phi", "array1"), ("band", "float"), ("limit", "float"),
                                           ("outside", "int_array1"), ("passed", "bool"),
@@ -753,7 +757,7 @@ _CODECS: dict[str, tuple[type | str, tuple[tuple[str, str], ...]]] = {
     "Equilibrium": (Equilibrium, (("ubar", "float_or_floats"), ("ybar", "float"), ("stable", "bool"),
                                   ("spectral_radius", "float"))),
     "Structure": (Structure, (("terms", "structure"),)),
-    "Record": (Record, (("u", "inputs"), ("y", "array1"), ("Ts", "float"), ("name", "str"), ("units", "names"),
+    "Record": (Record, (("u", "inputs"), ("y", "array1"), ("Ts", "float"), ("name", "str"), ("units", "units"),
                         ("input_names", "names_or_none"))),
     "Dataset": (Dataset, (("ident", "Record"), ("valid", "Record"), ("static", "StaticPoints_or_none"),
                           ("description", "str"), ("extra", "plain_map"))),
@@ -803,7 +807,7 @@ _STATIC = ("StaticPoints", "StaticCurve", "StaticSurface")
 _KINDS = frozenset({"float", "array1", "array2", "inputs", "int", "seed", "str", "bool", "floats", "pairs", "exponents",
                     "structure", "structures", "names", "arrays", "dict_arrays", "failures", "skipped", "frame",
                     "static", "local_models", "ints", "int_array1", "bool_array1", "texts", "band",
-                    "correlation_tests", "plain_map", "float_or_floats", "prints"})
+                    "correlation_tests", "plain_map", "float_or_floats", "prints", "units"})
 _KINDS = _KINDS | {k + _OR_NONE for k in _KINDS}
 
 #: Fields written for the reader only (ignored on load), per type: their names and how to write them.
@@ -974,7 +978,20 @@ def _dump(v: Any, level: int = 0) -> str:
     return _text(v)
 
 
-def _units_arg(units: tuple[str, str] | Mapping[str, str] | None) -> dict | None:
+def _read_units(rd: Any, v: Any, where: str) -> tuple:
+    """A file's (input unit, output unit): the input's one str or a list of str, one per input (checked by the
+    value's constructor against its inputs)."""
+    pair = rd.list(v, where)
+    if len(pair) != 2:
+        raise rd.fail(where, "units must be a pair of strings (input unit, output unit), the input's one string or "
+                             f"one string per input, got {v!r}")
+    ins = pair[0]
+    ins = (rd.str(ins, f"{where}[0]") if not isinstance(ins, list) else
+           tuple(rd.str(x, f"{where}[0][{i}]") for i, x in enumerate(ins)))
+    return (ins, rd.str(pair[1], f"{where}[1]"))
+
+
+def _units_arg(units: tuple | Mapping[str, Any] | None) -> dict | None:
     if units is None:
         return None
     if isinstance(units, Mapping):
@@ -983,13 +1000,19 @@ def _units_arg(units: tuple[str, str] | Mapping[str, str] | None) -> dict | None
             raise ValueError(f"units: unknown key(s) {', '.join(other)}; a mapping of units has the keys 'u' and 'y'")
         units = (units.get("u", ""), units.get("y", ""))
     u, y = check_units(units, "the file's header")  # a str is one unit, not a pair: never split into its letters
-    return {"u": u, "y": y}
+    return {"u": u if isinstance(u, str) else list(u), "y": y}
 
 
-def _contradicts(said: Sequence[str], own: Sequence[str]) -> bool:
+def _contradicts(said: Sequence, own: Sequence) -> bool:
     """Whether units ``said`` (input, output) name another unit than a value's ``own`` where both name one (an
-    empty unit says nothing)."""
-    return any(a and b and a != b for a, b in zip(said, own))
+    empty unit says nothing; inputs in units of their own, input by input)."""
+    return any(input_unit(said, j) and input_unit(own, j) and input_unit(said, j) != input_unit(own, j)
+               for j in range(max(_n_units(said), _n_units(own)))) or bool(said[1] and own[1] and said[1] != own[1])
+
+
+def _n_units(units: Sequence) -> int:
+    """How many input units ``units`` lists (1: one for every input)."""
+    return 1 if isinstance(units[0], str) else len(units[0])
 
 
 def _own_units(obj: Any) -> tuple[str, str] | None:
@@ -1001,7 +1024,8 @@ def _own_units(obj: Any) -> tuple[str, str] | None:
         return obj.units
     for v in (obj, getattr(obj, "model", None)):
         units = getattr(v, "units", None)
-        if isinstance(units, tuple) and len(units) == 2 and all(isinstance(x, str) for x in units):
+        if isinstance(units, tuple) and len(units) == 2 and isinstance(units[1], str) and (
+                isinstance(units[0], str) or isinstance(units[0], tuple)):
             return units
     return None
 
@@ -1070,14 +1094,17 @@ def _header(doc: Any, rd: _Reader) -> dict:
     units = doc.get("units")
     if units is not None:
         d = rd.dict(units, "units")
-        if set(d) - {"u", "y"} or not all(isinstance(x, str) for x in d.values()):
-            raise rd.fail("units", f"expected {{\"u\": str, \"y\": str}}, got {units!r}")
+        per_input = isinstance(d.get("u"), list) and all(isinstance(x, str) for x in d["u"]) and d["u"]
+        if set(d) - {"u", "y"} or not isinstance(d.get("y", ""), str) or not (isinstance(d.get("u", ""), str)
+                                                                              or per_input):
+            raise rd.fail("units", f"expected {{\"u\": str or [str, …], \"y\": str}}, got {units!r}")
     allowed = {"format", "format_version", "graybox_version", "type", "units", "object"}
     extra = sorted(set(doc) - allowed)
     if extra:
         raise rd.fail("header", f"unknown field(s) {extra}" + _newer(str(doc.get("graybox_version", ""))))
     return {"format": "graybox", "format_version": ver, "graybox_version": str(doc.get("graybox_version", "")),
-            "type": typ, "units": None if units is None else (units.get("u", ""), units.get("y", ""))}
+            "type": typ, "units": None if units is None else check_units((units.get("u", ""), units.get("y", "")),
+                                                                          "the file's header")}
 
 
 class _Refused(ValueError):

@@ -54,9 +54,10 @@ class Model(Relocked):
         another period is refused where the model meets it (``simulate``, ``predict``, and the
         scores built on them). None (default: a model written by hand, or read from a file of an
         earlier graybox): unknown, not checked. Estimators set it from their records.
-    units : (str, str), optional
+    units : tuple, optional
         The units of the input(s) and the output in the records the model was identified on (e.g.
-        ``("rpm", "mlc")``), as :class:`~graybox.Record` has them. Its parameters hold in those units
+        ``("rpm", "mlc")``, or ``(("l/min", "°C"), "m")`` for inputs in units of their own), as
+        :class:`~graybox.Record` has them. Its parameters hold in those units
         only: a Record in other units is refused where the model meets it, as one at another period
         is. Empty (the default, a model written by hand or read from an earlier file): unknown, not
         checked. Estimators set them from their records.
@@ -69,7 +70,7 @@ class Model(Relocked):
     name: str = ""
     input_names: tuple[str, ...] | None = None
     Ts: float | None = None
-    units: tuple[str, str] = ("", "")
+    units: tuple[str | tuple[str, ...], str] = ("", "")
 
     def __post_init__(self) -> None:
         check_str(self.name, "name")
@@ -106,6 +107,7 @@ class Model(Relocked):
                     getattr(inner, "structure", None) is st:
                 names = inner.input_names
         object.__setattr__(self, "input_names", model_input_names(st, names))
+        object.__setattr__(self, "units", check_units(self.units, f"model {self.name!r}", len(self.input_names)))
 
     # -- basic facts --------------------------------------------------------
     @property
@@ -134,7 +136,7 @@ class Model(Relocked):
         period than the model was identified at, or in other units where both name them."""
         check_fitted_on(self.Ts, self.units, f"model {self.name!r} was identified", record,
                         "its parameters hold in those units only; convert the data (or give them the model's units "
-                        "if only the label differs)")
+                        "if only the label differs)", self.input_names)
 
     # -- dynamics -----------------------------------------------------------
     def predict(self, record: Record, *, horizon: int = 1) -> np.ndarray:

@@ -10,6 +10,7 @@ from matplotlib.figure import Figure
 
 from ..control._local import LocalModel, OperatingCurve
 from ..core._reprs import LISTED, level_texts, per_unit, percent_text, point_texts
+from ..core._records import input_unit, input_unit_text
 from ..core._validation import as_1d_finite, check_count, check_real, check_sequence
 from ._data import distinct_colours, legend_every, legend_text, unit_label
 
@@ -32,9 +33,9 @@ def _points(lms: Sequence[LocalModel]) -> list[str]:
     return point_texts(ub[:, 0] if ub.shape[1] == 1 else ub)
 
 
-def _per_input(units: tuple[str, str]) -> str:
-    """The unit of a gain, output unit per input unit (``"mlc/rpm"``), or empty when neither is said."""
-    return per_unit(units[1], units[0])
+def _per_input(units: tuple, j: int = 0) -> str:
+    """The unit of a gain, output unit per unit of input ``j`` (``"mlc/rpm"``), or empty when neither is said."""
+    return per_unit(units[1], input_unit(units, j))
 
 
 def _points_title(head: str, points: Sequence[str], width: float) -> str:
@@ -105,16 +106,17 @@ def plot_local_models(
             raise ValueError(f"duration={duration:g} s is {n} samples of a model sampled every {m.Ts:g} s: at most "
                              f"{100 * MAX_STEP_SAMPLES} are drawn; give a shorter duration")
         w = np.logspace(np.log10(np.pi / m.Ts) - 3, np.log10(np.pi / m.Ts), n_frequencies)
-        tag = f"ū = {at[id(m)]}{' ' + m.units[0] if m.units[0] else ''}" + ("" if m.reached else f" ({m.status})")
+        said = input_unit_text(m.units)
+        tag = f"ū = {at[id(m)]}{' ' + said if said else ''}" + ("" if m.reached else f" ({m.status})")
         line, = ax_s.plot(np.arange(n) * m.Ts, m.step(n, input), lw=1.2, color=colour, label=tag)
         G = m.frequency_response(w, input)
         ax_m.loglog(w, np.abs(G), color=line.get_color(), lw=1.0)
         ax_p.semilogx(w, np.degrees(np.unwrap(np.angle(G))), color=line.get_color(), lw=1.0)
     # the models' units (output per input) where they all say the same ones
     units = {m.units for m in shown}
-    per = _per_input(units.pop()) if len(units) == 1 else ""
     # with several inputs, which one was stepped (input=0 and input=1 drew figures labelled alike)
     names = shown[0].input_names
+    per = _per_input(units.pop(), shown[0]._input_index(input)) if len(units) == 1 else ""
     of = f" of {names[shown[0]._input_index(input)]}" if len(names) > 1 else ""
     ax_s.set_xlabel("time (s)")
     ax_s.set_ylabel(unit_label(f"Δy per unit step{of}", per))
@@ -169,6 +171,7 @@ def plot_operating_curve(
     if not isinstance(curve, OperatingCurve):
         raise TypeError(f"curve must be an OperatingCurve, got {type(curve).__name__}")
     u, gain, gain_low, gain_high = curve.ubar, curve.gain, curve.gain_low, curve.gain_high
+    j = 0  # the input drawn against
     if u.ndim != 1:
         # several inputs (e.g. a transient input's z̄ = 0 beside u): drawn against the one the points vary
         names = curve.local_models[0].input_names
@@ -206,7 +209,7 @@ def plot_operating_curve(
         ax.plot(u[o], y[o], "-o", ms=3, lw=1.2, label=legend_text(name))
         if lo is not None:
             ax.fill_between(u[o], lo[o], hi[o], alpha=0.25, label=f"{percent_text(curve.level)} band")
-        ax.set_ylabel(unit_label(lab, _per_input(curve.units)) if lab == "gain" else lab)
+        ax.set_ylabel(unit_label(lab, _per_input(curve.units, j)) if lab == "gain" else lab)
     if reference is not None:
         axes[1].plot(*reference, "s", ms=5, color="black", label=legend_text(reference_label))
     axes[2].set_ylim(0.0, 1.05)  # ζ of a stable pole lies in [0, 1]
@@ -214,6 +217,6 @@ def plot_operating_curve(
     if bad:
         axes[0].set_title(_points_title("not reached at ū = ", bad, 7.0), fontsize=9)
     axes[1].legend(fontsize=8, loc="best")
-    axes[2].set_xlabel(unit_label(xlabel, curve.units[0]))
+    axes[2].set_xlabel(unit_label(xlabel, input_unit(curve.units, j)))
     fig.tight_layout()
     return fig

@@ -15,7 +15,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from ..static._curves import StaticCurve
-from ..core._records import Dataset, Record, StaticPoints
+from ..core._records import Dataset, Record, StaticPoints, input_unit
 from ..models._coerce import as_model
 from ..models._model import Model
 from ..core._reprs import LISTED
@@ -226,7 +226,9 @@ def plot_static_curve(
         ax.plot(ub, c(ub), "-", label=legend_text(c.name))
     if points is not None:
         ax.plot(levels, points.ybar, "*", linestyle="none", markersize=9, color="k", label=legend_text(points.name))
-    u_unit, y_unit = ("", "") if points is None else points.units
+    # the varied input's own unit (points holding all inputs but one: that one's)
+    u_unit, y_unit = ("", "") if points is None else (
+        input_unit(points.units, 0 if varied is None else points.input_names.index(varied)), points.units[1])
     ax.set_xlabel(unit_label(xlabel, u_unit))
     ax.set_ylabel(unit_label(ylabel, y_unit))
     ax.grid(True, alpha=0.3)
@@ -283,12 +285,14 @@ def plot_record(
     # the input is held over [t_k, t_k + Ts): draw it as steps, as the plant sees it
     if record.u.ndim == 1:
         ax_u.step(t, record.u[start:stop], where="post", label=input_label)
-    else:  # several inputs: one line each, named in a legend
+    else:  # several inputs: one line each, named in a legend (with its own unit where the inputs' differ)
+        per = not isinstance(record.units[0], str)
         for j, nm in enumerate(record.input_names):
-            ax_u.step(t, record.u[start:stop, j], where="post", label=legend_text(nm))
+            ax_u.step(t, record.u[start:stop, j], where="post",
+                      label=legend_text(unit_label(nm, input_unit(record.units, j)) if per else nm))
         ax_u.legend(loc="best", fontsize="small")
     ax_y.plot(t, record.y[start:stop], "-", linewidth=0.8, label=output_label)
-    u_unit, y_unit = record.units
+    u_unit, y_unit = ("" if not isinstance(record.units[0], str) else record.units[0]), record.units[1]
     ax_u.set_ylabel(unit_label(input_label, u_unit))
     ax_y.set_ylabel(unit_label(output_label, y_unit))
     ax_y.set_xlabel("Time (s)")

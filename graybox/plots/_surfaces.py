@@ -19,6 +19,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from ..core._records import check_units, input_unit
 from ..core._validation import check_count, check_int, check_real, check_sequence
 from ..core._reprs import level_texts
 from ..models._coerce import as_model
@@ -131,7 +132,7 @@ def _columns(s: Surface, i: int, names: tuple[str, ...] | None) -> list[int] | N
     return [names.index(n) for n in own]
 
 
-def _points(points: object) -> tuple[np.ndarray, np.ndarray, str, tuple[str, str]] | None:
+def _points(points: object) -> tuple[np.ndarray, np.ndarray, str, tuple] | None:
     if points is None:
         return None
     ub = np.asarray(getattr(points, "ubar", None), dtype=float)
@@ -139,8 +140,9 @@ def _points(points: object) -> tuple[np.ndarray, np.ndarray, str, tuple[str, str
     if ub.ndim != 2 or ub.shape[1] != 2 or yb.shape != (ub.shape[0],):
         raise ValueError(f"static points must have ubar of shape (K, 2) and ybar of shape (K,), got {ub.shape} "
                          f"and {yb.shape}")
-    units = getattr(points, "units", ("", ""))
-    return ub, yb, str(getattr(points, "name", "static points")), (str(units[0]), str(units[1]))
+    # units as the points say them (check_units' form: the inputs' one unit or one per column)
+    units = check_units(getattr(points, "units", ("", "")), "static points")
+    return ub, yb, str(getattr(points, "name", "static points")), units
 
 
 def _domain(s: Surface, i: int, names: tuple[str, ...] | None) -> tuple[float, float] | None:
@@ -309,7 +311,7 @@ def plot_surface_slices(
                 ax.plot(ub[on, against], yb[on], "*", linestyle="none", markersize=9, color=col,
                         label=None if labelled else legend_text(pname))
                 labelled = True
-    u_unit, y_unit = ("", "") if pts is None else pts[3]
+    u_unit, y_unit = ("", "") if pts is None else (input_unit(pts[3], against), pts[3][1])
     ax.set_xlabel(unit_label(xlabel if xlabel is not None else input_labels[against], u_unit))
     ax.set_ylabel(unit_label(ylabel, y_unit))
     ax.grid(True, alpha=0.3)
@@ -406,9 +408,9 @@ def plot_surface_contours(
         if ax.get_legend_handles_labels()[0]:  # points named "": nothing to label (matplotlib warned), as in
             # plot_static_curve
             ax.legend(loc="upper left", fontsize="small")
-    u_unit, y_unit = ("", "") if pts is None else pts[3]
-    fig.colorbar(filled, ax=ax, label=unit_label(output_label, y_unit))
-    ax.set_xlabel(unit_label(input_labels[0], u_unit))
-    ax.set_ylabel(unit_label(input_labels[1], u_unit))
+    units = ("", "") if pts is None else pts[3]
+    fig.colorbar(filled, ax=ax, label=unit_label(output_label, units[1]))
+    ax.set_xlabel(unit_label(input_labels[0], input_unit(units, 0)))
+    ax.set_ylabel(unit_label(input_labels[1], input_unit(units, 1)))
     ax.set_title(_name(s, 0))
     return fig

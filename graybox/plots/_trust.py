@@ -12,7 +12,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from ..diagnostics._bootstrap import DecisionBootstrap
-from ..core._records import StaticPoints, check_same_units
+from ..core._records import StaticPoints, check_same_units, input_unit
 from ..core._validation import check_bool, check_choice, check_int
 from ..core._reprs import level_texts, per_unit, percent_text
 from ._pareto import _why_not_drawn
@@ -177,7 +177,9 @@ def plot_static_band(
     if points is not None:  # drawn over the band, points in other units would sit at the wrong ū and ȳ
         check_same_units(band.units, "plot_static_band: the band is in", points, "convert the points")
     # the band's units (its model's), the points' where the band names none
-    u_unit, y_unit = (band.units[k] or ("" if points is None else points.units[k]) for k in (0, 1))
+    k_in = i if surface else 0  # the input drawn against
+    u_unit = input_unit(band.units, k_in) or ("" if points is None else input_unit(points.units, k_in))
+    y_unit = band.units[1] or ("" if points is None else points.units[1])
     xlabel = unit_label(xlabel, u_unit)
     colours = distinct_colours(len(groups))
     every = legend_every(len(groups), SLICES_NAMED)  # one in this many slices named, beyond SLICES_NAMED
