@@ -39,6 +39,13 @@ def check_committed(name: str) -> None:
     for c in cells:
         assert c["outputs"] == [] and c["execution_count"] is None, f"{name}: a code cell has outputs"
     assert "".join(cells[0]["source"]).strip().startswith("QUICK ="), f"{name}: the first code cell must set QUICK"
+    # nbformat 4.5 requires a unique id per cell: 06 and 07 had none, 05 four cells without one, which nbformat (and
+    # so jupyter nbconvert --execute, nbclient) warned of as "will become a hard error" on reading them
+    ids = [c.get("id") for c in nb["cells"]]
+    assert None not in ids and len(set(ids)) == len(ids), f"{name}: cells without an id, or ids repeated: {ids}"
+    import nbformat
+
+    nbformat.validate(nbformat.from_dict(nb))  # the schema, with warnings as errors
 
 
 def verdict(config, name: str) -> dict:
