@@ -82,6 +82,14 @@ def _buck(ns: dict) -> None:
     # PE set's points, not one per model of the Σ*_y sweep
     ranges = [m for c, m in _CAUGHT if c == "StaticRangeWarning"]
     assert len(ranges) == 2, ranges
+    # the paper's Σ*_y: the least-squares model's is above 1 (refused), the ELS model's just below it, accepted and
+    # a near-integrator that misses the validation record (the text said both were "at or above 1" and refused)
+    assert ns["ls"].clusters()["Σy"] > 1 > ns["els"].clusters()["Σy"] > 0.999
+    table = ns["sigma_table"]
+    assert table.loc["CLS (22), Σ*y from ELS", "JS_valid"] > 5 * table.loc["CLS (22), Σy estimated", "JS_valid"]
+    assert table.loc["CLS (22), Σ*y from ELS", "fit_valid"] < 0
+    said = _said("04_buck_converter.ipynb")
+    assert "least-squares model's Σ_y is above 1" in said and "negative fit" in said
 
 
 def _simulation_error(ns: dict) -> None:
