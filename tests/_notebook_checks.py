@@ -131,6 +131,10 @@ def _miso(ns: dict) -> None:
     assert table.loc["D_SF direct", "JS_valid"] < table.loc["SE D_SF", "JS_valid"] < table.loc["PE D_SF", "JS_valid"]
     # the quick run's: "with J_SF a quarter and a tenth of the band"
     assert 0.15 < table.loc["PE D_SF", "JSF"] / band < 0.4 and table.loc["SE D_SF", "JSF"] / band < 0.15
+    # the ELS model's Σy is above 1, its y·u clusters keeping its denominator positive (the text said they brought it
+    # "back down", where the code's comment said "back up")
+    c = ns["els"].clusters()
+    assert c["Σy"] > 1 > ns["sigma_y"] and "keep its denominator 1 − Σy − Σyu1 ū1 − Σyu2 ū2 positive" in said
 
 
 def _control(ns: dict) -> None:
