@@ -74,6 +74,12 @@ def _black_box(ns: dict) -> None:
         assert not r.tests["xi_xi"].passed and not r.tests["u2_xi"].passed, name
         xi = r.tests["xi_xi"]
         assert np.max(np.abs(xi.lags[np.abs(xi.phi) > xi.limit])) > 6, name  # beyond the six lags of the models
+    # the ℓ = 3 model: the text said "cubic y terms give the steady-state equation several roots"; FROLS picked terms
+    # in y² and none in y³, two roots at each speed shown
+    els3 = ns["els3"]
+    assert max(t.power_of("y") for t in els3.structure) == 2
+    assert all(len(els3.equilibria(ub)) == 2 for ub in ns["data"].static.ubar[[0, len(ns["data"].static) // 2, -1]])
+    assert "terms in y² but none in y³" in _said("01_black_box.ipynb")
 
 
 def _buck(ns: dict) -> None:
