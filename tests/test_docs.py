@@ -150,6 +150,31 @@ def test_every_public_function_has_a_numpy_parameters_section():
     assert not missing, missing
 
 
+def test_every_array_parameter_of_a_public_function_gives_its_shape():
+    """An API page says each array's shape (the project's rule): nine entries typed ``ndarray`` or ``array_like`` did
+    not (evaluate's and static_curve_band's y0, the θ that cls, pe_pareto and cls_uncertainty take as reference,
+    se_pareto's theta0, se_dsf's pe_lambdas, bootstrap_decision's lambdas, stacked_regressors' residuals)."""
+    import inspect
+
+    from graybox._layers import LAYERS
+
+    shapeless = []
+    for unit in (u for u, _, _ in LAYERS if not u.startswith("_") and u != "reproduce"):
+        module = importlib.import_module(f"graybox.{unit}")
+        for name in module.__all__:
+            obj = getattr(module, name)
+            doc = inspect.getdoc(obj) or "" if inspect.isfunction(obj) else ""
+            section = doc.split("\nParameters\n----------\n", 1)
+            if len(section) < 2:
+                continue
+            body = re.split(r"\n\w[\w ]*\n-+\n", section[1])[0]  # up to the next section (Returns, Raises …)
+            for entry in re.split(r"\n(?=\w[\w, ]* :)", body):
+                head = entry.split("\n", 1)[0]
+                if re.search(r"ndarray|array_like", head) and "shape" not in entry:
+                    shapeless.append(f"graybox.{unit}.{name}: {head}")
+    assert not shapeless, shapeless
+
+
 def test_the_site_takes_a_newcomer_from_own_csv_files_to_a_model(site):
     """Issue 25's newcomer has a CSV of the plant and a few static points: the README's "Your own plant" (the CSV
     dialects, the three files, the black and gray boxes from them) was on no page of the site, whose guide named

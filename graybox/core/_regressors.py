@@ -208,8 +208,8 @@ def stacked_regressors(
     records : Record or sequence of Record
     start : int, optional
         First sample of each record (default: the structure's max lag).
-    residuals : sequence of ndarray, optional
-        One residual series per record, for noise terms.
+    residuals : sequence of ndarray, each of shape (N_r,), optional
+        One residual series per record (output units), for noise terms.
 
     Returns
     -------

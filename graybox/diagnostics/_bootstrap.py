@@ -414,8 +414,8 @@ def bootstrap_decision(
         uncertainty: give ``band``).
     estimator : {"pe", "se"}
         The sweep: :func:`graybox.pe_pareto` or :func:`graybox.se_pareto`.
-    lambdas : array_like, optional
-        λ1 values (default: the estimator's paper sweep; a short one keeps the bootstrap fast).
+    lambdas : array_like of shape (P,), optional
+        λ1 values in (0, 1] (default: the estimator's paper sweep; a short one keeps the bootstrap fast).
     n_boot : int
         Replicates B.
     block_length : int, optional

@@ -1003,7 +1003,7 @@ def cls_uncertainty(
         As for :func:`graybox.cls`.
     how : {"auto", "curve", "points", "context"}
         As for :func:`graybox.cls`.
-    reference : {"free", "ls", "els"}, Model, ndarray or float
+    reference : {"free", "ls", "els"}, Model, ndarray of shape (n_terms,) or float
         As for :func:`graybox.cls` (Σ*_y of eq. (22)); its own randomness is not propagated.
     constraints : constraint or iterable of constraints, optional
         As for :func:`graybox.cls` (affine ones only).
@@ -1627,9 +1627,9 @@ def static_curve_band(
         Monte Carlo draws (at least 10; checked for either method).
     seed : int
         Seed of the Monte Carlo draws.
-    y0 : float or array_like, optional
-        Initial output to pick the estimate's equilibrium where several are stable (as for
-        :meth:`graybox.Model.static_curve`).
+    y0 : float or array_like of shape (M,), optional
+        Initial output (output units; one for all ū or one per ū) to pick the estimate's equilibrium where
+        several are stable (as for :meth:`graybox.Model.static_curve`).
 
     Returns
     -------

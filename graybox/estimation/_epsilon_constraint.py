@@ -468,7 +468,7 @@ def se_dsf(
         Largest number of trial steps.
     tol : float
         Relative decrease of J_S (of J_SF while a run restores feasibility) below which a run stops.
-    pe_lambdas : ndarray, optional
+    pe_lambdas : ndarray of shape (P,), optional
         λ1 values of the PE sweep (closed form) whose member nearest the band is one start
         (default: 60 in logspace(-6, 0)).
     margin : float in [0, 1), "auto" or None

@@ -1231,7 +1231,7 @@ def cls(
         as many points as there are such clusters, at two levels or more. With several inputs it fits a surface on exactly the monomials
         of the structure's Σ_{u^e} clusters (:meth:`StaticSurface.fit`), so it needs at least as
         many points as there are such clusters.
-    reference : {"free", "ls", "els"}, Model, ndarray or float
+    reference : {"free", "ls", "els"}, Model, ndarray of shape (n_terms,) or float
         Where Σ*_y of eq. (22) comes from: ``"free"`` (default) estimated with the other
         parameters (the least-squares model among all whose static function is the curve; it does
         not depend on where the input's zero is); ``"ls"`` the unconstrained least-squares
@@ -1759,7 +1759,7 @@ def pe_pareto(
         Warm-start OSQP from the neighbouring λ (the sweep runs from λ1 = 1 downwards).
     threads : int
         Threads for the batch free runs of the evaluator.
-    reference : {"free", "ls", "els"}, Model, ndarray or float
+    reference : {"free", "ls", "els"}, Model, ndarray of shape (n_terms,) or float
         Σ*_y for a :class:`~graybox.CurveEquality` among ``constraints`` (see :func:`cls`; default
         ``"free"``: estimated).
 

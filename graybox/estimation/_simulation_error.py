@@ -1858,7 +1858,7 @@ def se_pareto(
         Show a progress bar; default: only on a terminal.
     threads : int
         Threads for the GA's population runs and the evaluation of the members.
-    theta0 : ndarray, "ls" or None
+    theta0 : ndarray of shape (n_terms,), "ls" or None
         Start. GA: an individual added to the first run's population (``"ls"``, the default: the
         least-squares estimate; ``None``: the paper's random individuals only). Gradient: the
         first run's start (``"ls"`` or ``None``: least squares).
@@ -1868,7 +1868,7 @@ def se_pareto(
         Gradient only: evaluations per ``least_squares`` run (default 50), its tolerances
         (1e-8) and its method (``"auto"``: "trf" and "dogbox" wherever the fit restarts, "trf" along
         the sweep; see ``gradient_front``).
-    starts : sequence of ndarray, "pe" or None
+    starts : sequence of ndarray, each of shape (n_terms,), "pe" or None
         Further starting points (engineering units). ``"pe"``: four PE solutions (closed form,
         λ1 = 0.1 … 1e-4 of eq. (11), leaning more and more on the static points). Gradient: tried
         wherever the fit restarts (None, the default: ``"pe"``). GA: individuals put into every

@@ -254,8 +254,9 @@ def evaluate(
         :func:`j1` and :func:`js`.
     static : StaticPoints, optional
         Static points for J_SF (default ``data.static``).
-    y0 : float or ndarray, optional
-        Initial output of the constant-input runs that define J_SF (default: the measured ȳ_i).
+    y0 : float or ndarray of shape (M,), optional
+        Initial output of the constant-input runs that define J_SF, output units: one for every static point or one
+        per point (default: the measured ȳ_i).
     horizons : sequence of int >= 1, keyword-only
         Prediction horizons k (samples) to score on the validation record as well: a column
         ``J{k}_valid`` each, the MSE of the prediction k samples ahead (``model.predict(valid,
