@@ -133,11 +133,23 @@ def _data_doc(unit: str, name: str, obj: object) -> list[str]:
 
 
 def _literal_bars(app, what, name, obj, options, lines) -> None:  # noqa: ANN001
-    """Docstrings write absolute values and norms as |x|, which reStructuredText reads as a substitution."""
+    """Docstrings write absolute values and norms as |x|, which reStructuredText reads as a substitution. Inside an
+    inline literal (between double backticks, which may span lines) a bar is no markup and a backslash shows as
+    itself: those bars are left alone."""
+    inside = False  # within an inline literal begun on an earlier line of its paragraph
     for i, line in enumerate(lines):
         bare = line.strip()
-        if "|" in line and not bare.startswith("+") and not (bare.startswith("|") and bare.endswith("|")):
-            lines[i] = line.replace("|", "\\|")
+        if not bare:
+            inside = False  # a literal ends with its paragraph at the latest
+            continue
+        if bare.startswith("+") or (bare.startswith("|") and bare.endswith("|")):  # a table's or a line block's
+            continue
+        parts = line.split("``")
+        for k in range(len(parts)):
+            inside = inside != (k > 0)  # each ``, after the first part, opens or closes a literal
+            if not inside:
+                parts[k] = parts[k].replace("|", "\\|")
+        lines[i] = "``".join(parts)
 
 
 #: Where each public name is documented: its subpackage.

@@ -150,6 +150,36 @@ def test_every_public_function_has_a_numpy_parameters_section():
     assert not missing, missing
 
 
+def _literal_bars():
+    """docs/conf.py's escaping of the bars docstrings write (|x|), compiled alone (importing conf.py builds the api/)."""
+    import ast
+
+    src = (ROOT / "docs" / "conf.py").read_text(encoding="utf-8")
+    fn = next(n for n in ast.parse(src).body if isinstance(n, ast.FunctionDef) and n.name == "_literal_bars")
+    ns: dict = {}
+    exec(compile(ast.Module([fn], type_ignores=[]), "conf.py", "exec"), ns)
+    return ns["_literal_bars"]
+
+
+def test_bars_inside_inline_literals_are_left_as_written():
+    """A bar outside an inline literal is escaped (reStructuredText reads |x| as a substitution); inside ``…``, where a
+    backslash is shown as itself, it is left alone: the API pages showed ``\\|G\\| (mlc/rpm)`` (plot_local_models),
+    ``\\|ȳ_model(ū_i) − ȳ_i\\| <= b`` (StaticBand) and ``" \\| "`` (GrayboxSelection's fold_terms)."""
+    lines = ["the band ``|ȳ_model(ū_i) − ȳ_i| <= b`` holds where |x| < 1", "label (e.g. ``|G| (mlc/rpm)``)",
+             "joined by ``\" | \"`` (``\"(none)\"``)", "| a | line block |", "+---+---+", "no bar",
+             "a literal ``over −", "two lines``, then |x| and ``|y|``", "", "|z|"]
+    _literal_bars()(None, "function", "f", None, {}, lines)
+    assert lines == ["the band ``|ȳ_model(ū_i) − ȳ_i| <= b`` holds where \\|x\\| < 1", "label (e.g. ``|G| (mlc/rpm)``)",
+                     "joined by ``\" | \"`` (``\"(none)\"``)", "| a | line block |", "+---+---+", "no bar",
+                     "a literal ``over −", "two lines``, then \\|x\\| and ``|y|``", "", "|z|"]
+
+
+def test_no_literal_on_an_api_page_shows_an_escaping_backslash(site):
+    shown = [f"{page.name}: {m}" for page in sorted((site / "api").glob("*.html"))
+             for m in re.findall(r'<span class="pre">([^<]*\\\|[^<]*)</span>', page.read_text(encoding="utf-8"))]
+    assert not shown, shown
+
+
 def test_every_array_parameter_of_a_public_function_gives_its_shape():
     """An API page says each array's shape (the project's rule): nine entries typed ``ndarray`` or ``array_like`` did
     not (evaluate's and static_curve_band's y0, the θ that cls, pe_pareto and cls_uncertainty take as reference,
