@@ -104,6 +104,14 @@ def test_user_guide_pages_exist(site):
         assert (site / "guide" / f"{page}.html").exists(), page
 
 
+def test_guide_emphasis_is_as_written(site):
+    """gray_box.md's "**Where Σ*_y of eq. (22) comes from.**" rendered as nested italics with a stray asterisk
+    (Markdown took the star of Σ*_y for emphasis): the heading of that paragraph read "Where Σ_y … comes from.*"."""
+    page = (site / "guide" / "gray_box.html").read_text(encoding="utf-8")
+    assert "<strong>Where Σ*_y of eq. (22) comes from.</strong>" in page
+    nested = [p.name for p in sorted((site / "guide").glob("*.html")) if "<em><em>" in p.read_text(encoding="utf-8")]
+    assert not nested, nested
+
 def test_ebic_is_described_as_information_criterion_computes_it():
     """EBIC adds 2 ln C(p, k) to BIC (Chen & Chen's extended BIC, γ = 1), as the guide said; the README and
     information_criterion's docstring said it adds "the logarithm of the number of subsets", half of it."""
