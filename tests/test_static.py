@@ -558,3 +558,18 @@ def test_static_points_take_their_levels_by_input_name_in_a_dict():
         StaticPoints({"a": [1.0, 2.0], "b": [3.0, "x"]}, ybar)
     with pytest.raises(ValueError, match=r"ubar: the dict names no input"):
         StaticPoints({}, [1.0])
+
+
+def test_a_dict_level_of_more_than_one_dimension_is_refused_not_flattened():
+    # {"a": [[1, 2], [3, 4]], "b": [1, 2, 3, 4]} was read as four points, a's matrix flattened row by row without a
+    # word (a 2-D ȳ is refused as not 1-D): each key's levels are one number or a 1-D sequence
+    with pytest.raises(ValueError, match=r"ubar\['a'\] must be one level or a 1-D sequence of levels, got shape "
+                                         r"\(2, 2\)"):
+        StaticPoints({"a": [[1.0, 2.0], [3.0, 4.0]], "b": [1.0, 2.0, 3.0, 4.0]}, [1.0, 2.0, 3.0, 4.0])
+    with pytest.raises(ValueError, match=r"\['pump'\] must be one level or a 1-D sequence of levels, got shape "
+                                         r"\(2, 1\)"):
+        StaticPoints({"pump": np.array([[1.0], [2.0]])}, [1.0, 2.0])
+    m = Model(Structure(["y(k-1)", "a(k-1)", "b(k-1)"]), [0.5, 1.0, 2.0])
+    with pytest.raises(ValueError, match=r"\['a'\] must be one level or a 1-D sequence"):
+        m.static_curve({"a": [[1.0, 2.0], [3.0, 4.0]], "b": [1.0, 2.0, 3.0, 4.0]})
+    np.testing.assert_array_equal(m.static_curve({"a": [1.0, 2.0], "b": [3.0, 4.0]}), [14.0, 20.0])

@@ -53,9 +53,12 @@ def _levels_by_name(x: Mapping[Any, Any], name: str) -> object:
 
     if not all(isinstance(k, str) for k in x):
         raise TypeError(f"{name}: a dict of input levels is keyed by the inputs' names (str), got keys {list(x)!r}")
+    given = {k: np.asarray(v, dtype=object) for k, v in x.items()}
+    for k, v in given.items():  # a matrix of levels would be flattened row by row into points no one gave
+        if v.ndim > 1:
+            raise ValueError(f"{name}[{k!r}] must be one level or a 1-D sequence of levels, got shape {v.shape}")
     # each level a number, said by its key (a bool, None or text would be refused later as the whole Series)
-    cols = {k: np.array([check_real(e, f"{name}[{k!r}]") for e in np.asarray(v, dtype=object).reshape(-1)])
-            for k, v in x.items()}
+    cols = {k: np.array([check_real(e, f"{name}[{k!r}]") for e in v.reshape(-1)]) for k, v in given.items()}
     if all(np.ndim(v) == 0 for v in x.values()):
         return pd.Series([c[0] for c in cols.values()], index=list(cols))
     sizes = {k: len(v) for k, v in cols.items()}
