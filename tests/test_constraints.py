@@ -220,6 +220,20 @@ def test_user_constraint_with_data_no_theta_meets_is_refused_by_name(rec, ls):
     np.testing.assert_allclose(cls(S15, rec, None, constraints=loose).model.theta, ls, rtol=1e-6, atol=1e-9)
 
 
+def test_user_constraint_with_absent_bounds_beside_large_values_is_kept(rec, ls):
+    # θ was set to ±1e9 to tell an absent bound from an infinite coefficient: where a finite expression overflows
+    # there (exp(θ) <= [10, inf, …], 1e300 θ <= [1e300, inf, …]) inf − inf gave NaN, and constraints the solver takes
+    # as they are were refused as holding 'an infinite coefficient of θ, or a bound no finite θ meets'
+    n = len(S15)
+    for fn in (lambda th: cp.exp(th) <= np.r_[10.0, np.full(n - 1, np.inf)],
+               lambda th: 1e300 * th <= np.r_[1e300, np.full(n - 1, np.inf)]):
+        np.testing.assert_allclose(cls(S15, rec, None, constraints=UserConstraint(fn)).model.theta, ls, rtol=1e-6,
+                                   atol=1e-9)
+    # an infinite coefficient that is −inf at every such θ is still one (inf · (θ1 − 1e10) <= 0)
+    with pytest.raises(ValueError, match=r"(?s)an inf: constraint .*infinite coefficient of θ"):
+        cls(S15, rec, None, constraints=UserConstraint(lambda th: np.inf * (th[0] - 1e10) <= 0, name="an inf"))
+
+
 # ---------------------------------------------------------------------------------------------
 # composition and the objects themselves
 # ---------------------------------------------------------------------------------------------

@@ -1446,24 +1446,31 @@ def _non_finite_data(c: cp.Constraint) -> tuple[bool, bool]:
 
 def _no_bound(c: cp.Constraint) -> bool:
     """Whether an inequality ``c`` (``expr <= 0``) whose data hold an infinity is met by every θ, an infinite bound on
-    the side that bounds nothing (θ1 <= inf, θ1 >= -inf; the solvers take it): ``expr`` is finite or −inf alike at
-    the variables 0 and ±1e9, where an infinite coefficient gives +inf or NaN at one of them. Anything else, or a
-    constraint of another cone, is not; one that cannot be evaluated so (a parameter without a value) is left to the
-    solve, as before."""
+    the side that bounds nothing (θ1 <= inf, θ1 >= -inf; the solvers take it): ``expr`` is finite or −inf alike, and
+    its gradient finite, at the variables 0 and ±1, where an infinite coefficient gives +inf or NaN in one of them
+    (inf · (θ1 − 1e10) is −inf at all three, its gradient not). Points no larger: at ±1e9 a finite expression
+    overflows (exp(θ), 1e300 θ) and inf − inf would read as an infinite coefficient. Anything else, or a constraint of
+    another cone, is not; one that cannot be evaluated so (a parameter without a value) is left to the solve."""
     import cvxpy as cp
+    import scipy.sparse
 
     if not isinstance(c, (cp.constraints.Inequality, cp.constraints.NonPos)):
         return False
     saved = [v.value for v in c.variables()]
     seen = []
     try:
-        for z in (0.0, 1e9, -1e9):
+        for z in (0.0, 1.0, -1.0):
             for v in c.variables():
                 v.value = np.full(v.shape, z)
             with np.errstate(invalid="ignore", over="ignore"):  # inf·0 and inf − inf are what is looked for
                 value = c.expr.value
+                grads = c.expr.grad
             if value is None:  # a parameter without a value: the solve says so
                 return True
+            for g in grads.values():  # None where the expression has no gradient there: its value alone says
+                g = g.data if scipy.sparse.issparse(g) else g
+                if g is not None and not np.isfinite(np.asarray(g, float)).all():
+                    return False
             seen.append(np.asarray(value, float))
     except ValueError:  # a variable of its own that takes no such value (nonneg=True): left to the solver, as before
         return True
