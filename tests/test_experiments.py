@@ -1002,3 +1002,38 @@ def test_a_data_sets_band_from_points_beyond_the_float_range_names_the_points():
                                          r".*band = B yourself"):
         DataSpec(name="far", dataset=far)
     assert DataSpec(name="near", dataset=d).band == pytest.approx(0.175 ** 2)
+
+
+def test_a_folder_under_the_home_folder_written_with_a_tilde(small_store, tmp_path, monkeypatch):
+    # fe76d520 made check_path expand a leading '~', but write_report, reproduce.run and a grid's base_dir checked
+    # the name and went on with the one given: out='~/rep' wrote a literal folder '~' in the working folder
+    import graybox.reproduce as rp
+
+    home, work = tmp_path / "home", tmp_path / "work"
+    home.mkdir(), work.mkdir()
+    monkeypatch.setenv("HOME", str(home))
+    monkeypatch.chdir(work)
+    undrawn_figures(monkeypatch)  # its file names are read; test_figures_and_report_files draws such a report
+    gx.write_report(small_store[0], "~/rep")
+    assert (home / "rep" / "leaderboard.csv").is_file()
+    seen = []
+
+    def section(quick, out):
+        seen.append(Path(out))
+        return "done"
+
+    monkeypatch.setattr(rp, "SECTIONS", (section,))
+    with open(work / "log.txt", "w") as log:
+        rp.run(quick=True, out="~/figs", stream=log)
+    assert seen == [home / "figs"] and (home / "figs").is_dir()
+    rows = ["t,u,y"] + [f"{k * 0.1:.1f},{1 + k % 3},{0.5 * k}" for k in range(12)]
+    for name in ("id.csv", "va.csv"):
+        (home / name).write_text("\n".join(rows) + "\n", encoding="utf-8")
+    (home / "st.csv").write_text("u,y\n1,2\n2,4\n3,6\n", encoding="utf-8")
+    rec = dict(u="u", y="y", time="t")
+    spec = {"name": "g", "data": [{"name": "m", "ident": dict(path="id.csv", **rec), "valid": dict(path="va.csv", **rec),
+                                   "static": dict(path="st.csv", u="u", y="y")}],
+            "structures": [{"name": "one", "terms": ["y(k-1)", "u(k-1)", "1"]}],
+            "variants": [{"name": "LS", "estimator": "ls"}]}
+    assert gx.Grid.from_dict(spec, base_dir="~").load_data()["m"].static.ybar.tolist() == [2.0, 4.0, 6.0]
+    assert not (work / "~").exists()

@@ -937,7 +937,8 @@ def write_report(
         new report; other files stay.
     """
     band = _checked_options(rule, band)
-    if not os.fspath(check_path(out, "out")):  # Path("") is the current folder, a folder nobody named
+    out = check_path(out, "out")  # '~/rep' the home folder's, as check_path reads it
+    if not os.fspath(out):  # Path("") is the current folder, a folder nobody named
         raise ValueError("out is empty: give the report's folder ('.' for the current folder)")
     html = check_bool(html, "html")
     if max_structures is not None:

@@ -407,7 +407,7 @@ class DataSpec:
             Folder that relative CSV paths are resolved against (default: the working folder).
         """
         if base_dir is not None:
-            check_path(base_dir, "base_dir")
+            base_dir = check_path(base_dir, "base_dir")  # '~/data' the home folder's, as check_path reads it
         if self.dataset is not None:
             ds = self.dataset
         elif self.bundled == "pumping":

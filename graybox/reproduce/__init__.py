@@ -93,7 +93,8 @@ def run(quick: bool = True, out: Path | None = None, stream: TextIO | None = Non
         raise ValueError(f"stream cannot be written ({exc}); pass an open text file") from None
 
     if out is not None:
-        if not os.fspath(check_path(out, "out")):  # Path("") is the current folder, a folder nobody named
+        out = check_path(out, "out")  # '~/figs' the home folder's, as check_path reads it
+        if not os.fspath(out):  # Path("") is the current folder, a folder nobody named
             raise ValueError("out is empty: give the folder's name ('.' for the current folder)")
         _writable_folder(Path(out))
         found = [c for c in checkpoint_paths(out, quick) if c.exists()]

@@ -29,9 +29,10 @@ def out_folder(out: object) -> Path:
     empty (``Path("")`` is the current folder, which nobody named: ``ValueError``, as :func:`graybox.reproduce.run`
     says), created if missing (as ``run`` creates it: a missing folder failed at the first figure, after the
     section's fits, and an empty name wrote there)."""
-    if not os.fspath(check_path(out, "out")):
+    out = check_path(out, "out")  # '~/figs' the home folder's, as check_path reads it
+    if not os.fspath(out):
         raise ValueError("out is empty: give the folder's name ('.' for the current folder)")
-    folder = Path(out)  # type: ignore[arg-type]
+    folder = Path(out)
     if folder.exists() and not folder.is_dir():
         raise NotADirectoryError(f"{folder} is a file, not a folder for the figures")
     folder.mkdir(parents=True, exist_ok=True)
