@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import assume, given, settings, strategies as st
 
 import graybox as gb
 from graybox.core._records import RecordPrint, record_print
@@ -668,3 +668,28 @@ def test_a_long_record_is_written_in_one_conversion_and_reads_back_the_same(monk
     ps = gb.ParetoSet(gb.Structure(["y(k-1)"]), np.ones((5, 1)), np.full(5, 0.5), np.zeros(5), np.zeros(5),
                       np.zeros(5), extra={"cost": cost})
     assert '"cost": [1.0, "inf", "-inf", "nan", -0.0]' in gb.to_json(ps)
+
+
+_JSON_NUMBER = st.one_of(
+    st.floats(allow_nan=False, allow_infinity=False).map(repr),  # every finite float64, subnormals and -0.0 too
+    st.integers(-2**1023, 2**1023).map(str),  # integers a hand or another tool wrote, beyond 2**53 too
+    st.builds(lambda m, e: f"{m}e{e}", st.integers(-10**20, 10**20), st.integers(-340, 290)))  # other spellings
+_JSON_SPACE = st.sampled_from(["", " ", "\n", "\t", "\r\n    "])
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.lists(st.tuples(_JSON_NUMBER, _JSON_NUMBER, _JSON_SPACE), min_size=1, max_size=8), st.booleans())
+def test_a_hand_written_array_loads_as_float_reads_each_number(cells, matrix):
+    # the one-conversion reader (speed60j) against Python's float() of each number's text, for a vector and a
+    # two-column matrix laid out with any white space a hand or another tool puts between the numbers
+    u = [float(a) for a, _, _ in cells]
+    y = [float(b) for _, b, _ in cells]
+    assume(all(map(np.isfinite, u + y)))  # past the float range: refused, held by the tests above
+    text = gb.to_json(gb.Record(np.zeros((len(cells), 2)) if matrix else np.zeros(len(cells)), np.zeros(len(cells))))
+    doc = json.loads(text)
+    u_text = ",".join(f"{s}[{a},{s}{a}]" if matrix else f"{s}{a}" for a, _, s in cells)
+    y_text = ",".join(f"{s}{b}{s}" for _, b, s in cells)
+    obj = json.dumps(dict(doc["object"], u="@U", y="@Y")).replace('"@U"', f"[{u_text}]").replace('"@Y"', f"[{y_text}]")
+    back = gb.from_json(json.dumps(dict(doc, object="@O")).replace('"@O"', obj))
+    np.testing.assert_array_equal(bits(back.y), bits(y))
+    np.testing.assert_array_equal(bits(back.u), bits(np.c_[u, u] if matrix else u))
