@@ -13,10 +13,12 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+from collections.abc import Mapping
 
 import numpy as np
 
-_KEPT: dict[str, object] = {}
+#: Each kept result by its arguments' key, beside the arguments: held, no id hashed in a key is another object's later
+_KEPT: dict[str, tuple[object, object]] = {}
 
 
 def _fingerprint(obj, h) -> None:
@@ -33,14 +35,14 @@ def _fingerprint(obj, h) -> None:
         h.update(f"{type(obj).__name__} {len(obj)}".encode())
         for x in obj:
             _fingerprint(x, h)
-    elif isinstance(obj, dict):
-        h.update(f"dict {len(obj)}".encode())
+    elif isinstance(obj, Mapping):  # a dict, or a FrozenMap (a Dataset's extra): by content, as a dict
+        h.update(f"mapping {len(obj)}".encode())
         for k in sorted(obj, key=repr):
             h.update(repr(k).encode())
             _fingerprint(obj[k], h)
     elif obj is None or isinstance(obj, (bool, int, float, complex, str, bytes)):
         h.update(f"{type(obj).__name__} {obj!r}".encode())
-    else:  # anything else is not known to be equal by content: never shared
+    else:  # anything else is not known to be equal by content: never shared (its id, the object held in _KEPT)
         h.update(f"{type(obj).__qualname__} {id(obj)}".encode())
 
 
@@ -58,7 +60,7 @@ def keep_selections(monkeypatch) -> None:
 
     def keep(*args, **kwargs):
         result = real(*args, **kwargs)
-        _KEPT[_key(args, kwargs)] = result
+        _KEPT[_key(args, kwargs)] = (result, (args, kwargs))
         return result
 
     monkeypatch.setattr(gb, "select_graybox", keep)
@@ -72,6 +74,6 @@ def reuse_selections(monkeypatch) -> None:
 
     def reuse(*args, **kwargs):
         key = _key(args, kwargs)
-        return _KEPT[key] if key in _KEPT else real(*args, **kwargs)
+        return _KEPT[key][0] if key in _KEPT else real(*args, **kwargs)
 
     monkeypatch.setattr(gb, "select_graybox", reuse)

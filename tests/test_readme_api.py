@@ -84,3 +84,16 @@ def test_output_error_example_runs():
 
 def data_valid_name() -> str:
     return gb.load_pumping().valid.name
+
+
+def test_a_kept_selection_is_found_by_its_arguments_content():
+    # tests/_once keyed a Dataset's extra (a FrozenMap, no dict) by its id: the README's freshly loaded data never
+    # met the guide's kept selection (each test made its two 12 s calls), or met another's where an id was reused
+    import _once
+
+    a, b = gb.load_pumping(), gb.load_pumping()
+    assert a.extra is not b.extra
+    cand = gb.Candidates(ny=6, nu=6, degree=2)
+    assert _once._key((cand, a), {}) == _once._key((gb.Candidates(ny=6, nu=6, degree=2), b), {})
+    other = gb.Dataset(a.ident, a.valid, a.static, extra={"static_curve": None})
+    assert _once._key((cand, a), {}) != _once._key((cand, other), {})
