@@ -1031,8 +1031,8 @@ def test_a_folder_under_the_home_folder_written_with_a_tilde(small_store, tmp_pa
         (home / name).write_text("\n".join(rows) + "\n", encoding="utf-8")
     (home / "st.csv").write_text("u,y\n1,2\n2,4\n3,6\n", encoding="utf-8")
     rec = dict(u="u", y="y", time="t")
-    spec = {"name": "g", "data": [{"name": "m", "ident": dict(path="id.csv", **rec), "valid": dict(path="va.csv", **rec),
-                                   "static": dict(path="st.csv", u="u", y="y")}],
+    spec = {"name": "g", "data": [{"name": "m", "ident": dict(path="id.csv", **rec),
+                                   "valid": dict(path="va.csv", **rec), "static": dict(path="st.csv", u="u", y="y")}],
             "structures": [{"name": "one", "terms": ["y(k-1)", "u(k-1)", "1"]}],
             "variants": [{"name": "LS", "estimator": "ls"}]}
     assert gx.Grid.from_dict(spec, base_dir="~").load_data()["m"].static.ybar.tolist() == [2.0, 4.0, 6.0]
