@@ -494,3 +494,11 @@ def test_the_refusal_of_fewer_samples_than_inputs_names_the_way_to_read_them_as_
         gb.simulate(s, th, u, y0=[0.0])
     got = gb.simulate(s, th, u, y0=[0.0], input_names=("u1", "u2", "u3"))
     np.testing.assert_allclose(got, [0.0, 1.0 + 4.0 + 9.0])
+
+
+def test_equilibria_of_two_points_by_name_says_how_many_points_it_got():
+    # a dict's np.shape is (): two points by name were refused as "got shape ()"
+    m = gb.Model(gb.Structure(["y(k-1)", "a(k-1)", "b(k-1)", "1"]), [0.5, 1.0, 2.0, 0.1])
+    assert m.equilibria({"a": 1.0, "b": 2.0})[0].ybar == pytest.approx(10.2)
+    with pytest.raises(ValueError, match=r"one point of shape \(2,\), got 2 points: call equilibria once per point"):
+        m.equilibria({"a": [1.0, 3.0], "b": [2.0, 4.0]})

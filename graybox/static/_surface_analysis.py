@@ -26,6 +26,7 @@ from __future__ import annotations
 import itertools
 
 from dataclasses import dataclass
+from typing import Mapping
 from functools import lru_cache
 
 import numpy as np
@@ -273,7 +274,10 @@ def surface_equilibria(structure: Structure, theta: np.ndarray, ubar: np.ndarray
     structure, theta = _static.checked_model(structure, theta)
     ub = points_of_inputs(ubar, names, one_point=True)
     if ub.shape[0] != 1:
-        raise ValueError(f"ubar must be one point of shape ({len(names)},), got shape {np.shape(ubar)}")
+        # a dict's shape is (): the points it holds are said (ū of two points by name read "got shape ()")
+        raise ValueError(f"ubar must be one point of shape ({len(names)},), got {ub.shape[0]} points"
+                         + ("" if isinstance(ubar, Mapping) else f" (shape {np.shape(ubar)})")
+                         + ": call equilibria once per point")
     sk, th = _folded(structure, theta, ub, names)
     point = tuple(float(v) for v in ub[0])
     _static.refuse_continuum(sk, th[0, 0], 1.0, "(" + ", ".join(map(exact_text, point)) + ")")
