@@ -6,6 +6,7 @@ import numpy as np
 
 import graybox as gb
 from graybox.estimation._simulation_error import CheckpointError
+from conftest import QUADRATIC_FIRST_ORDER, quadratic_first_order_data
 
 
 def _problem():
@@ -49,3 +50,21 @@ def test_an_archive_of_another_tool_is_refused_naming_what_it_lacks(tmp_path):
     else:
         raise AssertionError("an archive without an SE sweep's metadata was taken for a checkpoint")
     assert np.array_equal(np.load(ck)["a"], np.arange(3))  # the user's file is left as it was
+
+
+def test_a_gradient_sweep_resumed_from_its_checkpoint_is_the_uninterrupted_one_to_the_last_bit(tmp_path):
+    # the static points' equilibria were remembered by θ alone, while a centred problem solves them from the
+    # optimiser's z (of which two can give one θ): the member a fit ended on was then read back as the next λ's start
+    # from the other z, and a sweep resumed from a checkpoint (a fresh problem, nothing remembered) fitted its later
+    # members 4e-16 apart from the uninterrupted sweep's
+    data = quadratic_first_order_data(0)
+    lam = np.logspace(-2, 0, 12)
+    ck = tmp_path / "front.npz"
+    whole = gb.se_pareto(QUADRATIC_FIRST_ORDER, data, lambdas=lam, method="gradient", checkpoint=ck)
+    cut = dict(np.load(ck))  # as a sweep killed after its fourth λ leaves it
+    cut["done"] = np.array(4)
+    cut["thetas"][4:], cut["costs"][4:], cut["nfev"][4:] = np.nan, np.inf, 0
+    np.savez(ck, **cut)
+    resumed = gb.se_pareto(QUADRATIC_FIRST_ORDER, data, lambdas=lam, method="gradient", checkpoint=ck)
+    assert np.array_equal(resumed.thetas, whole.thetas)
+    assert np.array_equal(resumed.JS, whole.JS) and np.array_equal(resumed.JSF, whole.JSF)

@@ -467,8 +467,11 @@ class SEProblem:
             raise ValueError("this problem has no static points")
         thetas = np.atleast_2d(thetas)
         # a least-squares solver takes the Jacobian at the point whose residuals it has just
-        # evaluated: the last single θ's equilibria are kept (read-only), not solved again
-        key = thetas.tobytes() if thetas.shape[0] == 1 else None
+        # evaluated: the last single θ's equilibria are kept (read-only), not solved again. Keyed by z too: a centred
+        # problem solves them from z, and two z of one θ gave two answers 4e-16 apart, so that the next λ's start read
+        # the last fit's and a sweep resumed from its checkpoint ended elsewhere than the uninterrupted one
+        key = thetas.tobytes() + (b"" if z is None else b"z" + np.asarray(z, float).tobytes()) \
+            if thetas.shape[0] == 1 else None
         memo = self._static_memo
         if key is not None and memo is not None and memo[0] == key and (scored or memo[2]):
             return memo[1]
