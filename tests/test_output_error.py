@@ -461,3 +461,32 @@ def test_a_checkpoint_fingerprinted_without_shapes_starts_over_as_one_of_another
                      json.loads(str(arrays["failures"])), arrays["nfev"])
     with pytest.raises(ValueError, match="another problem"):
         se_pareto(OE_STRUCT, fit, static, **kw)
+
+
+def _random_walk():
+    """A record whose least-squares (and ELS) fit of y(k-1), y(k-1)², u(k-1) is unstable (a local spectral radius
+    about 1.04 along it) and diverges in free run."""
+    rng = np.random.default_rng(3)
+    return ["y(k-1)", "y(k-1)^2", "u(k-1)"], gb.Record(rng.standard_normal(120), np.cumsum(rng.standard_normal(120)))
+
+
+def test_a_start_whose_free_run_diverges_is_pulled_inside_the_margin_by_output_error():
+    # a start outside the margin is pulled in by shrinking its output feedback, but only where its free run stayed
+    # bounded: least squares and ELS, unstable and diverging, were dropped as 'free run diverges' and margin=0.1
+    # (the tool that makes them stable) ended in "no start of the output-error fit gave a model"
+    terms, rec = _random_walk()
+    p = SEProblem(terms, rec, None, margin=0.1)
+    assert not np.isfinite(p.js(p.ls_theta()[None])[0]) and not p.within_margin(p.ls_theta())[0]
+    r = output_error(terms, rec, margin=0.1, n_starts=0, solver="trf")
+    assert "feedback ×" in r.start and r.radius <= 0.9 + 1e-9 and np.isfinite(r.JS)
+    assert np.isfinite(gb.js(r.model, rec))
+    assert any(s.startswith("least squares, feedback ×") for s in r.starts["start"])
+
+
+def test_a_start_whose_free_run_diverges_is_pulled_inside_the_margin_by_the_gradient_sweep():
+    # the same in the gradient sweep's restarts (se_pareto, se_dsf's coarse sweep): every member failed with
+    # 'free run diverges' though the margin brings least squares inside
+    terms, rec = _random_walk()
+    ps = se_pareto(terms, rec, gb.StaticPoints([-1.0, 1.0], [-1.0, 1.0]), lambdas=[1.0], method="gradient",
+                   margin=0.1, starts=[])
+    assert not ps.failures and ps.extra["radius"][0] <= 0.9 + 1e-9 and np.isfinite(ps.JS[0])

@@ -325,7 +325,9 @@ def _oe_fit(problem: SEProblem, rec: list[Record], *, n_starts, subsample, theta
             for label, th0 in cands:
                 bar.update(1)
                 js0 = float(problem.js(th0[None])[0])
-                if np.isfinite(js0) and not problem.within_margin(th0)[0]:
+                # a start whose free run diverges is pulled in too: an unstable least squares is what the margin
+                # makes stable (they were dropped as diverging, and margin=0.1 ended with no start at all)
+                if not problem.within_margin(th0)[0]:
                     pulled = _pull_inside(problem, th0, 1.0)
                     if pulled is None:
                         row(label, "", "infeasible", _why_infeasible(problem, th0, 1.0) + "; no scaling of its "

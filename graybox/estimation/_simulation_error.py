@@ -1534,9 +1534,10 @@ def _multistart(problem: SEProblem, lam1: float, cands: list[tuple[str, np.ndarr
         start = _Start(problem, problem.to_z(th0), lam1)
         if not np.isfinite(start.residuals(problem.to_z(th0))[0]):
             pulled = None
-            if problem.margin is not None and np.isfinite(problem.js(th0[None])[0]) \
-                    and not problem.within_margin(th0)[0]:
-                pulled = _pull_inside(problem, th0, lam1)  # outside the margin: shrink its feedback
+            # outside the margin, a diverging start too (an unstable least squares, which the margin makes stable):
+            # shrink its feedback
+            if problem.margin is not None and not problem.within_margin(th0)[0]:
+                pulled = _pull_inside(problem, th0, lam1)
             if pulled is None:
                 why.setdefault(_why_infeasible(problem, th0, lam1), []).append(name)
                 continue
