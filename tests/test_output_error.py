@@ -490,3 +490,11 @@ def test_a_start_whose_free_run_diverges_is_pulled_inside_the_margin_by_the_grad
     ps = se_pareto(terms, rec, gb.StaticPoints([-1.0, 1.0], [-1.0, 1.0]), lambdas=[1.0], method="gradient",
                    margin=0.1, starts=[])
     assert not ps.failures and ps.extra["radius"][0] <= 0.9 + 1e-9 and np.isfinite(ps.JS[0])
+
+
+def test_when_every_start_diverges_without_a_margin_the_error_offers_one():
+    # the message said "a smaller margin" of a fit that had none, where a margin is what brings the starts in
+    terms, rec = _random_walk()
+    with pytest.raises(ValueError, match=r"free run diverges.*margin=0\.1") as exc:
+        output_error(terms, rec, margin=None, n_starts=0, solver="trf")
+    assert "smaller margin" not in str(exc.value)

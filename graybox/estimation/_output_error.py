@@ -375,8 +375,11 @@ def _oe_fit(problem: SEProblem, rec: list[Record], *, n_starts, subsample, theta
     if "theta" not in best:
         reasons = "; ".join(f"{s}{f' ({v})' if v else ''}: {m}" for s, v, m in
                             zip(starts["start"], starts["solver"], starts["message"]))
-        raise ValueError(f"no start of the output-error fit gave a model: {reasons}. Try theta0, more starts, a "
-                         "smaller margin or another structure")
+        margin = ("a smaller margin" if problem.margin is not None else
+                  "a stability margin (e.g. margin=0.1: starts outside it are pulled inside by shrinking their output "
+                  "feedback)")
+        raise ValueError(f"no start of the output-error fit gave a model: {reasons}. Try theta0, more starts, "
+                         f"{margin} or another structure")
     th = best["theta"]
     model = Model(st, th, name=name, **carried_from(rec))
     return OEResult(
