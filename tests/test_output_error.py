@@ -498,3 +498,22 @@ def test_when_every_start_diverges_without_a_margin_the_error_offers_one():
     with pytest.raises(ValueError, match=r"free run diverges.*margin=0\.1") as exc:
         output_error(terms, rec, margin=None, n_starts=0, solver="trf")
     assert "smaller margin" not in str(exc.value)
+
+
+def test_a_start_outside_the_margin_only_at_a_static_point_is_pulled_inside_by_the_gradient_sweep():
+    # y(k) = 0.5 y(k-1) + 0.2 u(k-1) y(k-1) + u(k-1): its local radius 0.5 + 0.2 u stays below 1 - 0.2 along a
+    # record in u ∈ [0, 1] but not at the static point ū = 2; the sweep pulled a start in only where the records
+    # said it was outside, so every start of λ1 < 1 was dropped ("outside the stability margin") and those members
+    # failed, while the GA (and se_dsf) pull such starts in
+    rng = np.random.default_rng(0)
+    terms = ["y(k-1)", "u(k-1)*y(k-1)", "u(k-1)"]
+    u = np.repeat(rng.uniform(0.0, 1.0, 40), 8)
+    rec = gb.Record(u, gb.Model(terms, [0.5, 0.2, 1.0]).simulate(u, np.zeros(1)) + 0.01 * rng.standard_normal(u.size))
+    ub = np.array([0.0, 1.0, 2.0])
+    points = gb.StaticPoints(ub, ub / (0.5 - 0.2 * ub))
+    with pytest.warns(gb.StaticRangeWarning):
+        ps = se_pareto(terms, rec, points, lambdas=[0.5], method="gradient", margin=0.2, starts=[], solver="trf",
+                       max_nfev=10)
+    assert not ps.failures and np.isfinite(ps.JS[0]) and np.isfinite(ps.JSF[0])
+    p = SEProblem(terms, rec, points, margin=0.2)
+    assert p.within_margin(ps.thetas, p.static_outputs(ps.thetas)).all()

@@ -1534,9 +1534,11 @@ def _multistart(problem: SEProblem, lam1: float, cands: list[tuple[str, np.ndarr
         start = _Start(problem, problem.to_z(th0), lam1)
         if not np.isfinite(start.residuals(problem.to_z(th0))[0]):
             pulled = None
-            # outside the margin, a diverging start too (an unstable least squares, which the margin makes stable):
-            # shrink its feedback
-            if problem.margin is not None and not problem.within_margin(th0)[0]:
+            # outside the margin, along the records or, where the static points weigh, at their equilibria, a
+            # diverging start too (an unstable least squares, which the margin makes stable): shrink its feedback
+            weighed = problem.static is not None and lam1 < 1.0
+            if problem.margin is not None and not problem.within_margin(
+                    th0, problem.static_outputs(th0[None]) if weighed else None)[0]:
                 pulled = _pull_inside(problem, th0, lam1)
             if pulled is None:
                 why.setdefault(_why_infeasible(problem, th0, lam1), []).append(name)
