@@ -9,6 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+import graybox as gb
 from graybox import Candidates, Model, Record, Structure, stacked_regressors
 from graybox.core._records import Dataset
 from graybox.selection._forward_regression import CandidateWarning, frols, information_criterion
@@ -430,3 +431,19 @@ def test_frols_fewer_terms_with_a_held_input_does_not_blame_offsets():
         with pytest.raises(FewerTermsError) as err:
             frols(Structure(["a(k-1)", "b(k-1)", "y(k-1)", "1"]), rec, n_terms=4)
     assert err.value.reached == 3 and "far from zero" not in str(err.value)
+
+
+@pytest.mark.parametrize("how", [dict(), dict(search="exact"), dict(semp=True)])
+def test_tolerance_cut_short_by_the_rows_says_so_not_that_every_candidate_was_looked_at(how):
+    # 6 samples of a lag-2 record: 4 rows, so at most 3 terms of the 15 candidates; the tolerance unmet there was
+    # said as "every candidate was looked at: raise tol, or add candidates", where a longer record is what is needed
+    rng = np.random.default_rng(3)
+    rec = Record(rng.uniform(-1.0, 1.0, 6), rng.uniform(-1.0, 1.0, 6))
+    cand = Candidates(2, 2, degree=2)
+    kw = {k: v for k, v in how.items() if k != "semp"}
+    select = gb.semp if how.get("semp") else frols
+    with pytest.warns(RuntimeWarning, match="tolerance 1e-30 not reached") as said:
+        sel = select(cand, rec, tol=1e-30, **kw)
+    assert len(sel.structure) == 3
+    text = " ".join(str(w.message) for w in said)
+    assert "every candidate was looked at" not in text and "4 regression rows" in text and "longer record" in text

@@ -103,7 +103,8 @@ def choose_model(
     rows_cap : int, optional
         The regression rows, when they alone kept larger models from being looked at (the largest
         size is rows − 1 and candidates were left): a criterion smallest there has only met the
-        record's end, an interpolation rather than a choice, and gets a warning saying so.
+        record's end, an interpolation rather than a choice, and gets a warning saying so; a
+        tolerance not reached there is said to need a longer record.
 
     Returns
     -------
@@ -134,8 +135,10 @@ def choose_model(
             few = reached[sizes[reached] == sizes[reached].min()]
             return int(few[crit[few] == crit[few].min()][-1]), f"{fraction} ≤ {rule.tol:g}"
         last = sizes.size - 1
-        # every candidate looked at: a larger max_terms looks at nothing more
-        advice = "raise max_terms or tol" if can_grow else "every candidate was looked at: raise tol, or add candidates"
+        # every candidate looked at, or every term the rows allow: a larger max_terms looks at nothing more
+        advice = ("raise max_terms or tol" if can_grow else
+                  f"{rows_cap} regression rows allow no more terms: use a longer record, fewer candidates, or raise tol"
+                  if rows_cap is not None else "every candidate was looked at: raise tol, or add candidates")
         warn(f"tolerance {rule.tol:g} not reached: {fraction} = {unexplained[last]:.3e} after {sizes[last]} terms "
              f"({advice})", RuntimeWarning)
         return last, f"tol {rule.tol:g} not reached in {sizes[last]} terms"
