@@ -142,3 +142,48 @@ def test_selection_and_output_error_refuse_overlapping_records():
 def test_records_of_other_input_counts_share_nothing():
     one, two = _record(1, 200), _record(1, 200, m=2)
     assert shared_stretch(one, two) is None and shared_stretch(two, one) is None
+
+
+def test_the_same_data_in_other_units_or_rounded_by_another_tool_is_refused():
+    """A test or choosing record that is a fitting record's samples with y (or u) in other units, or written to
+    6 significant digits by another tool, is the fitting data: its score would be made up (a model of the data in
+    one set of units scored on them in another), or optimistic (rounded), and no exact sample matches it."""
+    rng = np.random.default_rng(4)
+    u = np.repeat(rng.uniform(0.0, 2.0, 40), 10)
+    y = gb.Model(gb.Structure(["y(k-1)", "u(k-1)", "1"]), np.array([0.7, 0.4, 0.1])).simulate(u, np.zeros(1))
+    y = y + 0.01 * rng.standard_normal(u.size)
+    ident = gb.Record(u, y, name="ident")
+    for other, what in [(gb.Record(u, 1e3 * y), "y = 1000·y"), (gb.Record(u, y + 273.15), "y = y + 273.15"),
+                        (gb.Record(60.0 * u[100:300], y[100:300]), "u = 60·u"),
+                        (gb.Record(np.array([float(f"{v:.6g}") for v in u[50:]]),
+                                   np.array([float(f"{v:.6g}") for v in y[50:]]) - 0.0), "rounded"),
+                        (gb.Record(u, 1e200 * y), "huge")]:  # its squares beyond the float range: nothing overflows
+        assert shared_stretch(other, ident) is None  # no sample of it is one of the fitting record's
+        with pytest.raises(ValueError, match="other units|rounding") as caught:
+            check_overlap(other, ident, "test", "identification", "test on other data")
+        assert caught.value.args[0].endswith(": test on other data")
+    # a run at inputs and outputs both scaled (a linear plant's response to a scaled input, or both in other units)
+    # is said, not refused; independent records are neither
+    with pytest.warns(gb.RecordOverlapWarning, match="scaled"):
+        check_overlap(gb.Record(2.0 * u, 2.0 * y), ident, "test", "identification", "test on other data")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        check_overlap(_record(1, 400), ident, "test", "identification", "test on other data")
+        check_overlap(gb.Record(u[::-1].copy(), y[::-1].copy()), ident, "test", "identification", "x")
+
+
+def test_select_graybox_refuses_a_test_or_validation_record_that_is_the_fitting_data_in_other_units():
+    # the test record Record(u, 1000·y) ran, and its JS_test scored a model of y on 1000·y (a made-up number)
+    rng = np.random.default_rng(5)
+    u = np.repeat(rng.uniform(0, 2, 60), 20)
+    y = gb.Model(gb.Structure(["y(k-1)", "u(k-1)", "1"]), np.array([0.7, 0.4, 0.1])).simulate(u, np.zeros(1))
+    y = y + 0.01 * rng.standard_normal(u.size)
+    ident, valid = gb.Record(u[:800], y[:800], name="ident"), gb.Record(u[800:], y[800:], name="valid")
+    cand = gb.Candidates(2, 2, degree=1)
+    with pytest.raises(ValueError, match=r"test record .* shares 400 samples with the identification record .* in "
+                                         r"other units \(its y = 1000 × the other's.*samples 0..399 are samples "
+                                         r"200..599 of the other"):
+        gb.select_graybox(cand, gb.Dataset(ident, valid, None), band=np.inf, sizes=[2],
+                          test=gb.Record(u[200:600], 1e3 * y[200:600]))
+    with pytest.raises(ValueError, match=r"validation record .* in other units \(its u = 60 × the other's"):
+        gb.select_graybox(cand, gb.Dataset(ident, gb.Record(60.0 * u[:800], y[:800]), None), band=np.inf, sizes=[2])

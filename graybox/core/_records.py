@@ -1218,12 +1218,156 @@ def check_overlap(a: Record, b: Record, a_name: str, b_name: str, advice: str, p
     """
     s = shared_stretch(a, b)
     if s is None:
+        _check_rescaled(a, b, a_name, b_name, advice, prefix)
         return
     said = _stretch_message(a, b, a_name, b_name, s)
     if sliced(s, len(a), len(b)):
         raise ValueError(f"{prefix}{said}: {advice}")
     warn(f"{prefix}{said}. Separate noise-free runs of one system share such stretches where their states meet; if it is "
          f"a piece of the {b_name} record instead, {advice}", RecordOverlapWarning)
+
+
+#: A column of one record is an affine map (other units, another zero) of the other's along a stretch when the map
+#: misses none of its samples by more than this fraction of the column's spread there plus 1e-5 of its largest
+#: magnitude (a file another tool wrote to 6 significant digits).
+_RESCALED_TOL = 1e-3
+#: Alignments tried per anchor window of :func:`rescaled_stretch`, the best correlated first.
+_RESCALED_TRIES = 4
+
+
+def _window_spread(y: np.ndarray, k: int) -> np.ndarray:
+    """The standard deviation of every window of ``k`` consecutive samples of ``y`` (y about 0: its median taken
+    off), from sliding sums of each window alone (no running sum's rounding): a window whose spread is below
+    rounding reads as about that rounding, which the caller's checks of whole stretches then refuse."""
+    ones = np.full(k, 1.0 / k)
+    mean = np.convolve(y, ones, "valid")
+    return np.sqrt(np.maximum(np.convolve(y * y, ones, "valid") - mean * mean, 0.0))
+
+
+def _rescaled_tol(z: np.ndarray) -> float:
+    """How far an affine map may miss a sample of ``z`` (see :data:`_RESCALED_TOL`), without squaring z."""
+    m = float(np.max(np.abs(z)))
+    return m * _RESCALED_TOL * (float(np.std(z / m)) + 1e-2) if m > 0.0 else 0.0
+
+
+def _affine(x: np.ndarray, z: np.ndarray) -> tuple[float, float] | None:
+    """(s, o) with z = s x + o on every sample to :data:`_RESCALED_TOL`, or None: a held x maps to a held z (s the
+    ratio of their levels, or 1 at 0), a varying x to a varying z."""
+    tol = _rescaled_tol(z)
+    if np.ptp(x) == 0.0:
+        if np.ptp(z) > 2.0 * tol:
+            return None
+        return (float(z[0] / x[0]), 0.0) if x[0] != 0.0 else (1.0, float(z[0]))
+    if np.ptp(z) <= 2.0 * tol:
+        return None  # x varies where z is held: no map of one onto the other (s = 0 fits it, and means nothing)
+    xc = x - x.mean()
+    s = float(xc @ (z - z.mean()) / (xc @ xc))
+    o = float(z.mean() - s * x.mean())
+    return (s, o) if float(np.max(np.abs(z - (s * x + o)))) <= tol else None
+
+
+def _rough_windows(y: np.ndarray, k: int, m: int) -> list[int]:
+    """Starts of ``m`` windows of ``k`` samples, one in each of m equal parts of ``y``: the one whose slope changes
+    most for its length (a step's onset; of a smooth response every window looks alike up to an affine map, a
+    decaying exponential's all of them), among those along which y varies."""
+    d1, d2 = np.abs(np.diff(y)), np.abs(np.diff(y, 2))
+    c1, c2 = np.concatenate([[0.0], np.cumsum(d1)]), np.concatenate([[0.0], np.cumsum(d2)])
+    count = len(y) - k + 1
+    moved = c1[k - 1:k - 1 + count] - c1[:count]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rough = (c2[k - 2:k - 2 + count] - c2[:count]) / moved
+    rough[~(moved > 0.0)] = -1.0
+    edges = np.linspace(0, count, m + 1).astype(int)
+    return [int(e0 + np.argmax(rough[e0:e1])) for e0, e1 in zip(edges[:-1], edges[1:])
+            if e1 > e0 and rough[e0:e1].max() > 0.0]
+
+
+def rescaled_stretch(a: Record, b: Record) -> tuple[tuple[int, int, int], list[tuple[float, float]]] | None:
+    """A stretch that slicing one record gives (:func:`sliced`) along which every column of ``a`` is an affine map of
+    ``b``'s, ``a = s b + o`` (the same data in other units, from another zero, or rounded by a file), or None.
+
+    Returns ``((start in a, start in b, length), [(s, o) of each input in common, in a's order, then of y])``.
+    A window of 16 samples in each of 8 parts of each record (the one where y's slope changes most) is matched
+    by correlation in the other; each alignment whose affine map holds at 64 samples spread over the stretch the
+    records share there (at least two windows long) is then checked over the whole of it.
+    """
+    za, zb = _samples(a, b)
+    k = _WINDOW
+    if za.shape[1] < 2 or min(len(za), len(zb)) < 2 * k:
+        return None
+    # each column times a power of two (exact) to at most 1 in magnitude: no square below overflows or underflows
+    ea, eb = (np.frexp(np.max(np.abs(z), axis=0))[1] for z in (za, zb))
+    za, zb = np.ldexp(za, -ea), np.ldexp(zb, -eb)
+    for x, z, flip in ((za, zb, False), (zb, za, True)):
+        yx, yz = x[:, -1], z[:, -1] - np.median(z[:, -1])
+        spread = _window_spread(yz, k)
+        level = np.convolve(yz, np.full(k, 1.0 / k), "valid")
+        loose = 1e-2 * (float(np.std(yz)) + 1e-2 * float(np.max(np.abs(yz))))
+        tried: set[int] = set()
+        for p in _rough_windows(yx, k, _ANCHORS):
+            w = yx[p:p + k] - yx[p:p + k].mean()
+            sw = float(np.linalg.norm(w))
+            with np.errstate(divide="ignore", invalid="ignore"):
+                corr = np.correlate(yz, w / sw, "valid") / (spread * np.sqrt(k))
+            near = np.flatnonzero((spread > 0.0) & (np.abs(corr) >= 1.0 - 1e-4))  # the window's shape
+            # the window's map (z = s x + o there), tried at 64 samples spread over the stretch shared at each
+            sc = corr[near] * spread[near] * np.sqrt(k) / sw
+            oc = level[near] - sc * yx[p:p + k].mean()
+            d = p - near  # x[i] is z[i - d]
+            i0 = np.maximum(0, d)
+            n = np.minimum(len(x) - i0, len(z) - (i0 - d))
+            probe = i0[:, None] + (np.linspace(0.0, 1.0, 64)[None, :] * np.maximum(n - 1, 0)[:, None]).astype(int)
+            held = np.abs(yz[probe - d[:, None]] - (sc[:, None] * yx[probe] + oc[:, None])).max(axis=1) <= loose
+            keep = np.flatnonzero(held & (n >= 2 * k))
+            keep = keep[np.argsort(-np.abs(corr[near[keep]]), kind="stable")][:_RESCALED_TRIES]
+            for q in keep:
+                dq, iq, nq = int(d[q]), int(i0[q]), int(n[q])
+                if dq in tried:
+                    continue
+                tried.add(dq)
+                xs, zs = x[iq:iq + nq], z[iq - dq:iq - dq + nq]
+                if flip:  # a's columns as maps of b's
+                    maps = [_affine(xs[:, c], zs[:, c]) for c in range(x.shape[1])]
+                    stretch = (iq - dq, iq, nq)
+                else:
+                    maps = [_affine(zs[:, c], xs[:, c]) for c in range(x.shape[1])]
+                    stretch = (iq, iq - dq, nq)
+                if any(m is None for m in maps):
+                    continue
+                # a = s b + o on the scaled columns: in their own units s·2^(ea − eb) and o·2^ea
+                return stretch, [(float(np.ldexp(s, int(e - f))), float(np.ldexp(o, int(e))))
+                                 for (s, o), e, f in zip(maps, ea, eb)]  # type: ignore[misc]
+    return None
+
+
+def _check_rescaled(a: Record, b: Record, a_name: str, b_name: str, advice: str, prefix: str) -> None:
+    """:func:`check_overlap` for :func:`rescaled_stretch`: refused where the inputs are the other's and the output is
+    not, or the output is and an input is not (no experiment gives that), or every signal is the other's up to
+    rounding; said (a :class:`RecordOverlapWarning`) where both are changed: other units, or a run of an affine plant
+    at affinely mapped inputs."""
+    found = rescaled_stretch(a, b)
+    if found is None:
+        return
+    (i, j, n), maps = found
+    names = [nm for nm in a.input_names if nm in b.input_names] + ["y"]
+    kept, said_maps = [], []
+    for nm, (s, o) in zip(names, maps):
+        x = (a.y if nm == "y" else a.input(nm))[i:i + n]
+        unit, zero = abs(s - 1.0) <= 1e-4, abs(o) <= _rescaled_tol(x)
+        kept.append(unit and zero)
+        if not (unit and zero):  # the map in words, round-off left out ("its y = 1000 × the other's")
+            said_maps.append(f"its {nm} = {'' if unit else f'{s:.6g} × '}the other's"
+                             + ("" if zero else f" {'+' if o > 0 else '−'} {abs(o):.6g}"))
+    how = ", ".join(said_maps)
+    said = (f"the {a_name} record ({a.name!r}) shares {n} samples with the {b_name} record ({b.name!r}) "
+            + (f"up to rounding (to {_RESCALED_TOL:g} of each signal's spread)" if all(kept)
+               else f"in other units ({how}, to {_RESCALED_TOL:g} of each signal's spread)")
+            + f": its samples {i}..{i + n - 1} are samples {j}..{j + n - 1} of the other")
+    if all(kept) or kept[-1] or all(kept[:-1]):
+        raise ValueError(f"{prefix}{said}: {advice}")
+    warn(f"{prefix}{said.replace('in other units', 'scaled')}. A run of a linear (or affine) plant at inputs "
+         f"mapped so gives such outputs; if it is the {b_name} data in other units instead, {advice}",
+         RecordOverlapWarning)
 
 
 def _samples(a: Record, b: Record) -> tuple[np.ndarray, np.ndarray]:
@@ -1419,4 +1563,5 @@ def choosing_records(value: object, name: str = "choose_on", example: str = "dat
 
 
 __all__ += ["outside_range", "rounded_levels", "same_record", "shared_stretch", "sliced", "check_overlap", "RecordOverlapWarning", "choosing_records",
+            "rescaled_stretch",
             "RecordPrint", "record_print", "check_print_overlap"]
