@@ -170,6 +170,13 @@ def test_the_same_data_in_other_units_or_rounded_by_another_tool_is_refused():
         warnings.simplefilter("error")
         check_overlap(_record(1, 400), ident, "test", "identification", "test on other data")
         check_overlap(gb.Record(u[::-1].copy(), y[::-1].copy()), ident, "test", "identification", "x")
+        # noise-free runs of a first-order plant at a held input, from other states: any two stretches of such a
+        # settling are affine maps of each other (the input says nothing of which data they are), nothing is said
+        first = gb.Model(gb.Structure(["y(k-1)", "u(k-1)", "1"]), np.array([0.9, 0.5, 0.2]))
+        held = np.ones(200)
+        runs = [gb.Record(held, first.simulate(held, np.array([y0])), name=f"from {y0}") for y0 in (0.0, 3.0, 50.0)]
+        for a, b in ((runs[1], runs[0]), (runs[0], runs[1]), (runs[2], runs[0])):
+            check_overlap(a, b, "validation", "identification", "x")
 
 
 def test_select_graybox_refuses_a_test_or_validation_record_that_is_the_fitting_data_in_other_units():

@@ -1258,8 +1258,8 @@ def _affine(x: np.ndarray, z: np.ndarray) -> tuple[float, float] | None:
         if np.ptp(z) > 2.0 * tol:
             return None
         return (float(z[0] / x[0]), 0.0) if x[0] != 0.0 else (1.0, float(z[0]))
-    if np.ptp(z) <= 2.0 * tol:
-        return None  # x varies where z is held: no map of one onto the other (s = 0 fits it, and means nothing)
+    if np.ptp(z) <= 2.0 * tol or np.ptp(x) <= 2.0 * _rescaled_tol(x):
+        return None  # one varies where the other is held (within its tolerance): no map of one onto the other
     xc = x - x.mean()
     s = float(xc @ (z - z.mean()) / (xc @ xc))
     o = float(z.mean() - s * x.mean())
@@ -1289,7 +1289,8 @@ def rescaled_stretch(a: Record, b: Record) -> tuple[tuple[int, int, int], list[t
     Returns ``((start in a, start in b, length), [(s, o) of each input in common, in a's order, then of y])``.
     A window of 16 samples in each of 8 parts of each record (the one where y's slope changes most) is matched
     by correlation in the other; each alignment whose affine map holds at 64 samples spread over the stretch the
-    records share there (at least two windows long) is then checked over the whole of it.
+    records share there (at least two windows long) is then checked over the whole of it, where an input varies
+    (at a held input, the settling of a plant of one mode is an affine map of any other of its settlings).
     """
     za, zb = _samples(a, b)
     k = _WINDOW
@@ -1332,7 +1333,9 @@ def rescaled_stretch(a: Record, b: Record) -> tuple[tuple[int, int, int], list[t
                 else:
                     maps = [_affine(zs[:, c], xs[:, c]) for c in range(x.shape[1])]
                     stretch = (iq, iq - dq, nq)
-                if any(m is None for m in maps):
+                if any(m is None for m in maps) or all(np.ptp(xs[:, c]) == 0.0 for c in range(x.shape[1] - 1)):
+                    # (every input held there: a settling at one input is an affine map of any other of it, from
+                    # any state, for a plant of one mode; such a stretch says nothing of which data it is)
                     continue
                 # a = s b + o on the scaled columns: in their own units s·2^(ea − eb) and o·2^ea
                 return stretch, [(float(np.ldexp(s, int(e - f))), float(np.ldexp(o, int(e))))
