@@ -447,3 +447,17 @@ def test_tolerance_cut_short_by_the_rows_says_so_not_that_every_candidate_was_lo
     assert len(sel.structure) == 3
     text = " ".join(str(w.message) for w in said)
     assert "every candidate was looked at" not in text and "4 regression rows" in text and "longer record" in text
+
+
+@pytest.mark.parametrize("search", ["greedy", "swap", "exact", "semp"])
+def test_a_tolerance_below_round_off_is_met_by_an_exact_fit(search):
+    # noise-free data, tol = 1e-30: the true 6 terms fit to round-off (the unexplained fraction's floor, 1e-20), which
+    # no tolerance can ask more of; greedy stopped there but warned "not reached ... raise max_terms or tol", swap,
+    # exact and semp went on to 27 terms fitted to round-off (semp over 350 steps) and warned
+    rec = narx_record(0, n=200)
+    cand = Candidates(3, 3, ne=0, degree=2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        sel = gb.semp(cand, rec, tol=1e-30) if search == "semp" else frols(cand, rec, tol=1e-30, search=search)
+    assert set(sel.structure) == set(TRUE)
+    assert "not reached" not in sel.stop

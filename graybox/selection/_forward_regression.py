@@ -844,7 +844,7 @@ def _frols_raw(candidates: Structure, data: object, *, n_terms: int | None, tol:
         i, stop = choose_model(rule, np.arange(1, k_eval + 1)[n0:], curve[n0:], (rss / yy)[n0:],
                                can_grow=k_eval < min(n_usable - n_dependent, N - 1),
                                fraction="1 - ΣERR",
-                               rows_cap=N if k_eval == N - 1 < n_usable - n_dependent else None)
+                               rows_cap=N if k_eval == N - 1 < n_usable - n_dependent else None, round_off=_RSS_FLOOR)
         n_sel = n0 + i + 1
     else:
         n_sel, stop = n_plan, plan.stop
@@ -1118,7 +1118,9 @@ def _forward(cols: _Columns, process: Structure, forced: list[int], K: int, rule
         active[j] = False
         engine.choose(k, j, active, last=k + 1 == K)
         chosen.append(j)
-        if rule is not None and rule.mode == "tol" and k + 1 >= len(forced) and engine.rss(k) / yy <= rule.tol:
+        # at the floor the fit is exact: it meets a tolerance below the floor too (the stopping rule's round_off)
+        if rule is not None and rule.mode == "tol" and k + 1 >= len(forced) and \
+                engine.rss(k) / yy <= max(rule.tol, _RSS_FLOOR):
             break
     cols.engine = engine
     return chosen, n_dependent
@@ -1198,7 +1200,8 @@ def _search_subsets_on(cols: _Columns, forced: list[int], K: int, rule: StopRule
     i, stop = choose_model(rule, ks, crit, plan.rss / cols.yy,
                            can_grow=not plan.exhausted and ks.max() < min(n_free + len(forced), N - 1),
                            fraction="1 - ΣERR",
-                           rows_cap=N if not plan.exhausted and ks.max() == N - 1 < n_free + len(forced) else None)
+                           rows_cap=N if not plan.exhausted and ks.max() == N - 1 < n_free + len(forced) else None,
+                           round_off=_RSS_FLOOR)
     how = ("exact (branch and bound, proven)" if plan.proven else
            f"exact search ran out of its {EXACT_NODES} nodes: best found, not proven") if search == "exact" else \
         "swap (local optimum under single exchanges)"

@@ -590,8 +590,8 @@ def _prune_budget(limit: int) -> int:
 def _stop_reason(run: _Search, cands: np.ndarray) -> tuple[str, bool]:
     """Why the search ends before the next forward step ("" to go on), and whether the size limit cut it short."""
     opt, sc, current, score = run.opt, run.sc, run.current, run.score
-    if opt.mode == "tol" and current and score / sc.yvar <= opt.tol:
-        return f"free-run MSE / var(y) = {score / sc.yvar:.3g} ≤ {opt.tol:g}", False
+    if opt.mode == "tol" and current and score <= max(opt.tol * sc.yvar, sc.floor):  # at the floor: exact
+        return f"free-run MSE / var(y) = {score / sc.yvar:.3g} ≤ {max(opt.tol, sc.floor / sc.yvar):.3g}", False
     if len(current) >= opt.limit:
         # cut short only if a larger structure could have been looked at: candidates and rows left
         return f"{opt.limit} terms reached", opt.limit < min(int(np.sum(~sc.zero)), sc.n_rows - 1)
@@ -667,7 +667,7 @@ def _result(run: _Search, stop: str, capped: bool, data: object) -> SEMPResult:
     i, why = choose_model(stop_rule(opt.n_terms, opt.tol, opt.criterion, curve_default="bic"),
                           scored["n_terms"].to_numpy(), scored["criterion"].to_numpy(),
                           scored["score"].to_numpy() / sc.yvar, can_grow=capped, fraction="free-run MSE / var(y)",
-                          rows_cap=rows_cap)
+                          rows_cap=rows_cap, round_off=sc.floor / sc.yvar)
     best = scored.iloc[i]
     if run.unpruned_from is not None and int(best["step"]) >= run.unpruned_from:
         # said as frols says its caps: the structure chosen was grown by steps that only added terms, not the

@@ -513,7 +513,8 @@ def search_sizes(problem: SubsetProblem, sizes: list[int], forced: list[int], *,
     subsets: list[tuple[int, ...]] = []
     rss: list[float] = []
     prev: list[int] = list(forced)
-    target = rule.tol * problem.yy if rule.mode == "tol" else None
+    # a subset at the round-off floor fits exactly and meets any tolerance (one below the floor too)
+    target = max(rule.tol, RSS_FLOOR) * problem.yy if rule.mode == "tol" else None
     exhausted = False
     for k in sizes:
         try:
