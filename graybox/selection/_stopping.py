@@ -141,7 +141,8 @@ def choose_model(
             few = reached[sizes[reached] == sizes[reached].min()]
             i = int(few[crit[few] == crit[few].min()][-1])
             return i, (f"{fraction} ≤ {rule.tol:g}" if unexplained[i] <= rule.tol else
-                       f"{fraction} at its round-off floor {round_off:.0e} (an exact fit; tol {rule.tol:g} is below it)")
+                       f"{fraction} at its round-off floor {round_off:.0e} (an exact fit; tol {rule.tol:g} is "
+                       "below it)")
         last = sizes.size - 1
         # every candidate looked at, or every term the rows allow: a larger max_terms looks at nothing more
         advice = ("raise max_terms or tol" if can_grow else
