@@ -897,3 +897,21 @@ def test_the_ratio_se_is_right_in_size_for_blocks_of_unequal_length(lengths):
     a = b * rng.chisquare(n, size=(draws, n.size)) / n * 1.2
     out = np.array([_ratio_se(a[k], b[k], w) for k in range(draws)])
     assert np.mean(out[:, 1] ** 2) == pytest.approx(np.var(out[:, 0]), rel=0.15)
+
+
+def test_a_selection_whose_chosen_row_names_other_terms_is_refused():
+    # a GrayboxSelection (a hand-edited file, a dataclasses.replace) whose rank-1 row's terms are another row's was
+    # taken: its structure and .model said one structure, the chosen row and model_of(chosen row) another
+    import dataclasses
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = gb.select_graybox(gb.Candidates(2, 2, ne=0, degree=1), gb.Dataset(plant(1, 400), plant(2, 400), None),
+                                estimator="ls", sizes=[2, 3], sources=["frols"], progress=False)
+    t = res.table.copy()
+    first, second = (int(np.flatnonzero(t["rank"].to_numpy() == r)[0]) for r in (1, 2))
+    assert t.iloc[first]["terms"] != t.iloc[second]["terms"]
+    for col in ("terms", "theta"):
+        t.iloc[first, t.columns.get_loc(col)] = t.iloc[second][col]
+    with pytest.raises(ValueError, match="chosen row's terms .* are not the chosen structure"):
+        dataclasses.replace(res, table=t)

@@ -233,6 +233,10 @@ class GrayboxSelection:
         said = self.table.loc[self.table["rank"] == 1, "in_band"].iloc[0]
         if bool(said) != bool(self.in_band):  # in_band is the choice's, as its row says
             raise ValueError(f"in_band is {self.in_band} but the chosen row's in_band is {bool(said)}")
+        if "terms" in self.table.columns:  # the structure is the choice's too (model_of of its row gave another)
+            terms = str(self.table.loc[self.table["rank"] == 1, "terms"].iloc[0])
+            if set(gb.parse_structure(terms)) != set(self.structure):
+                raise ValueError(f"the chosen row's terms ({terms}) are not the chosen structure ({self.structure})")
 
     @property
     def chosen(self) -> pd.Series:
