@@ -313,3 +313,16 @@ def test_semp_counts_ebic_candidates_as_frols_does():
     bic = N * np.log(path["score"].to_numpy()) + path["n_terms"].to_numpy() * np.log(N)
     ln_subsets = np.log([float(math.comb(p, int(k))) for k in path["n_terms"]])
     np.testing.assert_allclose(path["criterion"].to_numpy(), bic + 2 * ln_subsets, rtol=1e-12)
+
+
+def test_a_selection_whose_subsets_leave_out_its_structure_is_refused():
+    # "structure is one of them" (Selection.subsets): a Selection (a hand-edited file, a dataclasses.replace) whose
+    # subsets lack the chosen structure, or a greedy one with subsets, was taken as it was
+    import dataclasses
+
+    sel = frols(TWO_CAND, two_input_record(1, n=300, noise=0.01), search="exact", max_terms=8)
+    keep = [i for i, S in enumerate(sel.subsets) if set(S) != set(sel.structure)]
+    with pytest.raises(ValueError, match="subsets hold no subset of the selected terms"):
+        dataclasses.replace(sel, subsets=tuple(sel.subsets[i] for i in keep), subset_rss=sel.subset_rss[keep])
+    with pytest.raises(ValueError, match="greedy"):
+        dataclasses.replace(sel, search="greedy")

@@ -286,6 +286,12 @@ class Selection(Relocked):
                 raise ValueError(f"{name} must have shape ({size},), got {a.shape}")
             object.__setattr__(self, name, locked(a))
         check_theta(n, self.theta)  # finite, as the model it gives needs (a file loads through here: graybox.io)
+        check_choice(self.search, "search", SEARCHES)
+        if self.search == "greedy" and self.subsets:  # greedy's size-k model is evaluated[:k]: it keeps no subsets
+            raise ValueError(f"Selection: a greedy search keeps no subsets, got {len(self.subsets)}")
+        if self.subsets and set(self.structure) not in [set(S) for S in self.subsets]:
+            raise ValueError(f"Selection: the {self.search} search's subsets hold no subset of the selected terms "
+                             f"{self.structure} (the structure is the best subset of its size)")
         for name in ("err", "err_evaluated", "rss", "subset_rss"):
             check_mean_square(getattr(self, name), f"Selection: {name} (a share or a sum of squares)")
         if self.n_rows < 1 or self.n_candidates < 1:
