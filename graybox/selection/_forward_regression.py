@@ -632,7 +632,7 @@ def frols(
         Number of terms to select, 1 ≤ n_terms ≤ number of process candidates.
     tol : float, optional
         ERR tolerance in (0, 1): stop once the unexplained fraction ``1 − ΣERR`` of yᵀy is at
-        most ``tol``.
+        most ``tol``, or at its round-off floor 1e-20 (an exact fit meets a tolerance below it).
     criterion : {"aic", "bic", "fpe", "ebic"}, optional
         Information criterion (see :func:`information_criterion`). Default: ``"bic"`` for the greedy search,
         ``"ebic"`` for ``"swap"`` and ``"exact"``: they compare many subsets of each size (C(p, k)), and the best

@@ -282,7 +282,8 @@ def semp(
     n_terms : int, optional
         Size of the structure to return.
     tol : float, optional
-        Relative free-run error in (0, 1) that ends the search.
+        Relative free-run error in (0, 1) that ends the search (met too by a free run at round-off,
+        1e-20 of the output's mean square: an exact fit meets a tolerance below it).
     criterion : {"aic", "bic", "fpe", "ebic"}, optional
         Information criterion of the free-run error (see :func:`graybox.information_criterion`; default
         ``"bic"``; EBIC's p counts the candidates besides the included ones, the all-zero ones and those
