@@ -49,8 +49,11 @@ def test_numbers_at_the_float_range_still_load():
     text = gb.to_json(gb.Equilibrium(ubar=1.0, ybar=2.0, stable=True, spectral_radius=0.5))
     big = gb.from_json(text.replace('"ybar": 2.0', '"ybar": 1.7976931348623157e308'))
     assert big.ybar == sys.float_info.max
-    tiny = gb.from_json(text.replace('"ybar": 2.0', '"ybar": 1e-400'))  # below the subnormals: zero, as written
-    assert tiny.ybar == 0.0
+    assert gb.from_json(text.replace('"ybar": 2.0', '"ybar": 5e-324')).ybar == 5e-324  # the smallest subnormal
+    assert gb.from_json(text.replace('"ybar": 2.0', '"ybar": 0e-400')).ybar == 0.0  # zero, as written
+    # below the subnormals float() reads 0.0: a number written not zero would load as another (mend61e)
+    with pytest.raises(gb.GrayboxFileError, match=r"object\.ybar: the number 1e-400 is not zero but below"):
+        gb.from_json(text.replace('"ybar": 2.0', '"ybar": 1e-400'))
 
 
 @pytest.fixture(scope="module")

@@ -20,7 +20,12 @@ One file holds one value::
 Numbers are JSON numbers written with Python's shortest round-trip ``repr``, so every finite float
 comes back bit for bit (−0.0 and subnormals included); ±∞ and NaN, which JSON lacks, are the
 strings ``"inf"``, ``"-inf"`` and ``"nan"``. Vectors are written on one line, matrices one row per
-line.
+line. Loading reads the ``NaN`` and ``Infinity`` literals Python's json writes as the values they name (each
+value's constructor then refuses a non-finite number where it has none, e.g. in θ); a number written finite and not
+zero that no float holds is refused, naming it and its place (``object.theta[2]: the number 1e400 is beyond the
+float range``): beyond ±1.8e308, which float() reads as ±inf, or below 5e-324, which it reads as 0.0 (``1e-400``).
+Either would load as a number other than the one written (an underflow is refused as an overflow is: a term's
+coefficient silently 0 is a term dropped); graybox never writes one.
 
 Types: :class:`~graybox.Model`, :class:`~graybox.NeuralModel`, :class:`~graybox.ParetoSet`,
 :class:`~graybox.Selection`, :class:`~graybox.ELSResult`, :class:`~graybox.NeuralFit`,
@@ -1108,7 +1113,7 @@ def _header(doc: Any, rd: _Reader) -> dict:
 
 
 class _Refused(ValueError):
-    """What JSON reads but a graybox file may not hold: an object naming one key twice, a number beyond the floats."""
+    """What JSON reads but a graybox file may not hold: an object naming one key twice."""
 
 
 def _once(pairs: list[tuple[str, Any]]) -> dict:
@@ -1122,14 +1127,72 @@ def _once(pairs: list[tuple[str, Any]]) -> dict:
     return out
 
 
-def _finite_float(text: str) -> float:
-    """A JSON number with a point or an exponent, refused where it is beyond the float range: float() reads 1e400
-    as inf, and a hand-written finite number loaded as an infinite one (an integer that large is refused too)."""
+class _Unheld:
+    """A JSON number the float cannot hold, in place of its value until the reader names where it is."""
+
+    def __init__(self, text: str):
+        self.text = text
+
+
+def _held(text: str) -> str | None:
+    """Why the JSON number ``text`` (with a point or an exponent) has no float, or None when it has one: beyond the
+    float range (float() reads 1e400 as inf) or, not zero, below the smallest subnormal (1e-400 read as 0.0), so that a
+    hand-written number would load as another one."""
     x = float(text)
     if math.isinf(x):
-        raise _Refused(f"the number {text[:30]} is beyond the float range (an infinite value is written \"inf\" or "
-                     "\"-inf\")")
-    return x
+        return (f"the number {text[:30]} is beyond the float range (an infinite value is written \"inf\" or "
+                "\"-inf\")")
+    if x == 0.0 and re.search("[1-9]", re.split("[eE]", text)[0]):
+        return (f"the number {text[:30]} is not zero but below the smallest float (5e-324), and would read as 0.0 "
+                "(write 0 where zero is meant)")
+    return None
+
+
+def _finite_float(text: str) -> float | _Unheld:
+    """A JSON number with a point or an exponent, or an :class:`_Unheld` where the float cannot hold it."""
+    return _Unheld(text) if _held(text) else float(text)
+
+
+def _unheld(doc: Any) -> tuple[str, str] | None:
+    """Where decoded JSON holds an :class:`_Unheld` number first (``object.theta[2]``), and its text; a stack, not
+    recursion, for a document nested as deep as json reads."""
+    stack = [("", doc)]
+    while stack:
+        where, v = stack.pop()
+        if isinstance(v, _Unheld):
+            return where, v.text
+        if type(v) is dict:
+            stack.extend((f"{where}.{k}" if where else k, x) for k, x in reversed(v.items()))
+        elif type(v) is list:
+            stack.extend((f"{where}[{i}]", x) for i, x in reversed(list(enumerate(v))))
+    return None
+
+
+#: Where a JSON number may underflow to 0.0: an exponent of -300 or below, or 20 zeros after the point (the number
+#: around it then checked by :func:`_held`; graybox writes subnormals as 5e-324 …, never a number that underflows).
+#: Each pattern starts with a literal, which re finds fast: a long record's text is searched in a few % of its parse.
+_TINY = tuple(re.compile(p) for p in (r"e-0*(?:[3-9]\d\d|[1-9]\d{3,})", r"E-0*(?:[3-9]\d\d|[1-9]\d{3,})", r"\.0{20}"))
+
+#: The characters of a JSON number.
+_NUMBER = frozenset("0123456789.eE+-")
+
+
+def _underflows(text: str) -> bool:
+    """Whether the JSON text holds a number that is not zero but reads as 0.0 (a string's text that looks like one
+    too: the document is then read number by number, which tells them apart)."""
+    maybe = _TINY if "." + "0" * 20 in text else _TINY[:2]  # str's search is faster still than re's
+    for m in itertools.chain.from_iterable(p.finditer(text) for p in maybe):
+        start, end = m.start(), m.end()
+        while start and text[start - 1] in _NUMBER:
+            start -= 1
+        while end < len(text) and text[end] in _NUMBER:
+            end += 1
+        try:
+            if _held(text[start:end]):
+                return True
+        except ValueError:  # not a number: inside a string
+            continue
+    return False
 
 
 def _holds_infinity(v: Any) -> bool:
@@ -1154,7 +1217,7 @@ def _parse(text: str, source: str) -> tuple[dict, Any]:
     constants: list[str] = []
     try:
         doc = json.loads(text, object_pairs_hook=_once, parse_constant=lambda c: constants.append(c) or float(c))
-        fast = not constants and not _holds_infinity(doc)
+        fast = not constants and not _holds_infinity(doc) and not _underflows(text)
     except (ValueError, RecursionError):
         fast = False
     try:
@@ -1174,6 +1237,9 @@ def _parse(text: str, source: str) -> tuple[dict, Any]:
         raise rd.fail("JSON", f"corrupt file ({exc.msg} at line {exc.lineno}, column {exc.colno})") from None
     except (ValueError, RecursionError) as exc:  # e.g. an integer of more digits than Python converts
         raise rd.fail("JSON", f"corrupt file ({exc})") from None
+    unheld = None if fast else _unheld(doc)
+    if unheld:
+        raise rd.fail(unheld[0], str(_held(unheld[1])))
     return _header(doc, rd), doc
 
 
