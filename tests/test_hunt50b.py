@@ -312,9 +312,9 @@ def test_a_selection_checkpoint_with_a_failed_member_resumes(pumping, selection_
     assert np.all(np.isfinite(again.model.theta))
 
 
-@pytest.mark.parametrize("edit", [
-    lambda o: o["model"]["theta"].__setitem__(0, o["model"]["theta"][0] + 1.0),
-    lambda o: o["decision"]["model"]["theta"].__setitem__(1, 0.0),
+@pytest.mark.parametrize("edit", [  # θ edited and its equation removed (a stale one is refused as such: mend61e)
+    lambda o: o["model"]["theta"].__setitem__(0, o["model"]["theta"][0] + 1.0) or o["model"].pop("equation"),
+    lambda o: o["decision"]["model"]["theta"].__setitem__(1, 0.0) or o["decision"]["model"].pop("equation"),
 ])
 def test_a_graybox_selections_model_is_its_decisions(selection_checkpoint, edit):
     # select_graybox gives the decision's model as the selection's model; a file whose two differed loaded, and the

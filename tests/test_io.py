@@ -698,3 +698,54 @@ def test_a_hand_written_array_loads_as_float_reads_each_number(cells, matrix):
     back = gb.from_json(json.dumps(dict(doc, object="@O")).replace('"@O"', obj))
     np.testing.assert_array_equal(bits(back.y), bits(y))
     np.testing.assert_array_equal(bits(back.u), bits(np.c_[u, u] if matrix else u))
+
+
+def _model_text(m):
+    doc = json.loads(gb.to_json(m))
+    return doc, doc["object"]
+
+
+def test_a_models_equation_that_disagrees_with_its_terms_and_theta_is_refused_naming_both():
+    # the equation was written for the reader and ignored on load: a file whose θ was edited (the equation not) or
+    # whose equation was edited loaded silently, the reader of the file seeing one model and graybox loading another
+    m = gb.Model(gb.Structure(["y(k-1)", "flow(k-1)", "1"]), [0.5, -2.0e-5, 3.25], input_names=("flow",))
+    doc, obj = _model_text(m)
+    assert obj["equation"] == "y(k) = 0.5 y(k-1) - 2e-05 flow(k-1) + 3.25"
+    obj["theta"][0] = 0.7
+    with pytest.raises(gb.GrayboxFileError, match=r"object\.equation: the equation 'y\(k\) = 0\.5 y\(k-1\) .*"
+                       r"disagrees with the structure and theta, which say 'y\(k\) = 0\.7 y\(k-1\) .*first at term 1"):
+        gb.from_json(json.dumps(doc))
+    for said in ("y(k) = 0.5 y(k-1) - 2e-05 flow(k-2) + 3.25",  # another term
+                 "y(k) = 0.5 y(k-1) + 2e-05 flow(k-1) + 3.25",  # another sign
+                 "y(k) = 0.5 y(k-1) - 2e-05 flow(k-1)",  # a term left out
+                 "y(k) = 0.5 y(k-1) - 2.00001e-05 flow(k-1) + 3.25",  # beyond θ at the 6 digits written
+                 "y(k) = 0.5 y(k-1) - 2e-05 flow(k-1) + 3.2",  # 3.25 to 2 digits: files write 6 ("1" is 1.00000)
+                 "not an equation"):
+        doc, obj = _model_text(m)
+        obj["equation"] = said
+        with pytest.raises(gb.GrayboxFileError, match="disagrees with the structure and theta"):
+            gb.from_json(json.dumps(doc))
+    for said in ("y(k) = 0.500000 y(k-1) - 2.0e-5 flow(k-1) + 3.250000000",  # θ to 6 digits or more
+                 "y(k) =   0.5 y(k-1)\n - 2e-05 flow(k-1) + 3.25"):  # spaces as an editor leaves them
+        doc, obj = _model_text(m)
+        obj["equation"] = said
+        assert gb.from_json(json.dumps(doc)).theta.tolist() == [0.5, -2.0e-5, 3.25]
+    doc, obj = _model_text(m)
+    del obj["equation"]  # a file without it: the model as its terms and θ say
+    assert gb.from_json(json.dumps(doc)).theta.tolist() == [0.5, -2.0e-5, 3.25]
+
+
+@settings(max_examples=8, deadline=None)
+@given(theta=st.lists(st.floats(-1e30, 1e30, allow_subnormal=True), min_size=4, max_size=4),
+       noise=st.floats(-1.0, 1.0), nudge=st.integers(0, 3))
+def test_a_saved_models_equation_agrees_and_an_edited_theta_does_not(theta, noise, nudge):
+    m = gb.Model(gb.Structure(["1", "y(k-1)", "u(k-2)y(k-1)", "u(k-1)^2"]), theta,
+                 noise_structure=gb.Structure(["e(k-1)"]), noise_theta=[noise])
+    doc, obj = _model_text(m)
+    assert gb.from_json(json.dumps(doc)).equation(digits=17) == m.equation(digits=17)
+    # a change of θ in its 5th significant digit (θ = 1 edited to 1.0001 too): no longer what the equation says
+    th = obj["theta"][nudge]
+    assume(abs(th) > 1e-300)
+    obj["theta"][nudge] = th * (1 + 1e-4)
+    with pytest.raises(gb.GrayboxFileError, match=f"first at term {nudge + 1},"):
+        gb.from_json(json.dumps(doc))

@@ -13,7 +13,7 @@ One file holds one value::
         "structure": ["y(k-1)", "u(k-2)y(k-6)", …],      terms as the paper prints them
         "theta": [0.6303, 0.00023011, …],
         …
-        "equation": "y(k) = 0.6303 y(k-1) + …"          for the reader only; ignored on load
+        "equation": "y(k) = 0.6303 y(k-1) + …"          for the reader, from the terms and θ; checked on load
       }
     }
 
@@ -50,7 +50,11 @@ refused when saving, not converted.
 Loading refuses, with a :class:`GrayboxFileError` naming the file and the problem: a file that is
 not JSON or not a graybox file, a newer or unknown ``format_version``, an unknown type, a type other
 than the one expected, a missing or unknown field, a value of the wrong kind; the value's own
-constructor then validates shapes and meaning (e.g. θ's length against the structure). The units
+constructor then validates shapes and meaning (e.g. θ's length against the structure). A Model's
+``structure`` and ``theta`` (and the noise terms) are the model; its ``equation`` is written from them to 6
+significant digits for the reader, and a file whose equation disagrees with them (θ edited and the equation not, or
+the other way round) is refused naming both: each coefficient must be θ to the 6 significant digits written (or
+to more, where the text shows more), term by term in order (a file without the equation loads). Its ``clusters`` are read and not checked. The units
 (of u and y) are written when given and read back with :func:`read_header`.
 
 A :class:`~graybox.ParetoSet`'s ``fitted_on`` is saved as a print of each record it was fitted on (its name, length,
@@ -815,10 +819,13 @@ _KINDS = frozenset({"float", "array1", "array2", "inputs", "int", "seed", "str",
                     "correlation_tests", "plain_map", "float_or_floats", "prints", "units"})
 _KINDS = _KINDS | {k + _OR_NONE for k in _KINDS}
 
-#: Fields written for the reader only (ignored on load), per type: their names and how to write them.
+#: The significant digits of a Model's equation in a file.
+_EQUATION_DIGITS = 6
+
+#: Fields written for the reader (not read as the value: a Model's equation is checked against it), per type: their names and how to write them.
 _READABLE: dict[str, tuple[tuple[str, ...], Callable[[Any], Mapping[str, Any]]]] = {
     "Model": (("equation", "clusters"),
-              lambda m: {"equation": m.equation(digits=6), "clusters": {k: _num(v) for k, v in m.clusters().items()}}),
+              lambda m: {"equation": m.equation(digits=_EQUATION_DIGITS), "clusters": {k: _num(v) for k, v in m.clusters().items()}}),
 }
 
 #: Saved type's name by class, for the classes imported so far (:func:`_type_name` adds the others when met).
@@ -951,7 +958,79 @@ def _decode_fields(name: str, v: Any, where: str, rd: _Reader) -> Any:
         obj = cls(**kwargs)
     except (ValueError, TypeError) as exc:
         raise rd.fail(where, f"not a valid {name}: {exc}") from None
+    if name == "Model" and "equation" in d:
+        _check_equation(rd.str(d["equation"], f"{where}.equation"), obj, f"{where}.equation", rd)
     return obj
+
+
+def _equation_pieces(text: str) -> list[tuple[int, str, str]] | None:
+    """The signed pieces of an equation as :meth:`Model.equation` writes it (``y(k) = -0.5 y(k-1) + 1 u(k-1) + e(k)``):
+    (sign, coefficient's text, term's text: ``1`` for the constant, ``e(k)`` for the noise), None where it is not so
+    written."""
+    words = text.split()
+    if words[:2] != ["y(k)", "="] or len(words) < 3:
+        return None
+    words, pieces, sign = words[2:], [], 1
+    if words == ["0"]:
+        return []
+    if words[0].startswith("-") and len(words[0]) > 1:
+        words = ["-", words[0][1:], *words[1:]]
+    elif words[0] not in "+-":
+        words = ["+", *words]
+    while words:
+        if len(words) < 2 or words[0] not in ("+", "-"):
+            return None
+        sign, coef, words = (1 if words[0] == "+" else -1), words[1], words[2:]
+        if coef == "e(k)":
+            pieces.append((sign, "1", "e(k)"))
+            continue
+        term = "1"
+        if words and words[0] not in ("+", "-"):
+            term, words = words[0], words[1:]
+        pieces.append((sign, coef, term))
+    return pieces
+
+
+def _check_equation(text: str, m: Model, where: str, rd: _Reader) -> None:
+    """Refuse a Model's ``equation`` text that does not say its terms and θ: each coefficient θ to the 6 significant
+    digits it is written with (or more, where the text shows more; 0 only for 0), each term the structure's, in
+    order."""
+    import decimal
+
+    want = [(th, str(t)) for th, t in zip(m.theta, m.structure)]
+    want += [(th, str(t)) for th, t in zip(m.noise_theta, m.noise_structure)]
+    want += [(1.0, "e(k)")] if len(m.noise_structure) else []
+    got = _equation_pieces(text)
+    first = None if got is not None and len(got) == len(want) else min(len(want), len(got or ()))
+    with decimal.localcontext() as exact:
+        exact.prec = 1200  # a float's decimal expansion in full (a subnormal's has ~750 digits): no rounding
+        for i, ((sign, coef, term), (th, t)) in enumerate(zip(got or (), want)):
+            try:
+                c = decimal.Decimal(coef)
+                # 6 significant digits as written (a coefficient 1 is 1.00000), more where the text shows more
+                shown = max(_EQUATION_DIGITS, len(c.as_tuple().digits))
+                ok = c.is_finite() and c >= 0 and term == t and (
+                    abs(sign * c - decimal.Decimal(float(th))) <= (decimal.Decimal(5).scaleb(c.adjusted() - shown)
+                                                                   if c else 0))
+            except decimal.InvalidOperation:  # not a number
+                ok = False
+            if not ok:
+                first = i
+                break
+    if first is None:
+        return
+
+    def short(x: str) -> str:
+        return repr(x if len(x) <= 200 else x[:150] + " … " + x[-40:])
+
+    at = ""
+    if first < len(want) and got is not None and first < len(got):
+        sign, coef, term = got[first]
+        at = (f"; first at term {first + 1}, where it says {'-' if sign < 0 else ''}{coef} {term} and the model "
+              f"{float(want[first][0])!r} {want[first][1]}")
+    raise rd.fail(where, f"the equation {short(text)} disagrees with the structure and theta, which say "
+                  f"{short(m.equation(digits=_EQUATION_DIGITS))}{at}. The structure and theta are the model; the equation is written "
+                  "from them for the reader: correct it to agree, or remove it")
 
 
 # --------------------------------------------------------------------------------------------
