@@ -149,8 +149,11 @@ def test_a_dataframe_of_inputs_holding_the_output_column_is_refused():
     assert gb.Record(pd.Series([1.0, 2.0], index=["x", "y"]), [1.0, 2.0]).u.tolist() == [1.0, 2.0]
     assert gb.Record(df[["u"]], df["y"], Ts=1.0).u.tolist() == [1.0, 2.0, 3.0, 4.0]
     assert gb.Record(df.drop(columns="y"), df["y"], Ts=1.0).n_inputs == 1
-    # other columns are read by position as before, e and k among them (an error signal e as the input)
-    assert gb.Record(pd.DataFrame({"e": [1.0, 2.0]}), [0.0, 1.0]).u.tolist() == [1.0, 2.0]
+    # a frame's columns name its inputs (mend61e): e and k, which no input may be called (e(k-1) is the noise), are
+    # refused saying so; input_names= names them otherwise, the columns then read by position
+    with pytest.raises(ValueError, match=r"column names.*input_names=.*input name 'e' is not a valid identifier"):
+        gb.Record(pd.DataFrame({"e": [1.0, 2.0]}), [0.0, 1.0])
+    assert gb.Record(pd.DataFrame({"e": [1.0, 2.0]}), [0.0, 1.0], input_names=["u"]).u.tolist() == [1.0, 2.0]
 
 
 def test_a_dataframe_of_inputs_holding_the_output_s_samples_is_refused_whatever_y_is_given_as():

@@ -466,3 +466,32 @@ def test_unnamed_candidates_for_data_of_named_inputs_are_told_how_to_name_them()
             call()
     named = gb.frols(gb.Candidates(2, 2, input_names=["speed", "valve"]), rec, n_terms=3)
     assert set(named.model.structure.input_names) <= {"speed", "valve"}
+
+
+def test_a_data_frames_column_names_are_its_inputs_names_as_a_dicts_keys_are():
+    # a dict's keys named the inputs (StaticPoints({"flow": …, "inlet": …})) where a DataFrame's columns were dropped:
+    # Record(df[["flow", "inlet"]], y) had the inputs u1, u2, and a structure written in flow(k-1) was refused on it
+    import pandas as pd
+
+    rng = np.random.default_rng(61)
+    df = pd.DataFrame({"flow": rng.random(40), "inlet": rng.random(40) + 20.0})
+    y = rng.random(40)
+    rec = gb.Record(df, y)
+    assert rec.input_names == ("flow", "inlet")
+    np.testing.assert_array_equal(rec.u, df.to_numpy())
+    assert gb.Record(df[["inlet"]], y).input_names == ("inlet",)
+    levels = pd.DataFrame({"flow": [1.0, 2.0, 3.0], "inlet": [20.0, 20.0, 25.0]})
+    by_dict = gb.StaticPoints({k: levels[k].to_numpy() for k in levels}, [1.0, 2.0, 3.0])
+    assert gb.StaticPoints(levels, [1.0, 2.0, 3.0]).input_names == by_dict.input_names == ("flow", "inlet")
+    assert gb.StaticPoints.from_repeats(pd.concat([levels, levels]), np.arange(6.0)).input_names == ("flow", "inlet")
+    # input_names= names them otherwise: by name where the columns are those names, by position where none
+    assert gb.Record(df, y, input_names=("inlet", "flow")).u[0].tolist() == [df.inlet[0], df.flow[0]]
+    assert gb.Record(df, y, input_names=("q", "T")).u[0].tolist() == [df.flow[0], df.inlet[0]]
+    # pandas' default columns 0, 1 are no names: the default ones
+    assert gb.Record(pd.DataFrame(df.to_numpy()), y).input_names == ("u1", "u2")
+    # a column that cannot be a term's name is refused, saying where the name came from and the way out
+    with pytest.raises(ValueError, match=r"the DataFrame's column names.*input_names=.*'flow rate' is not a valid"):
+        gb.Record(df.rename(columns={"flow": "flow rate"}), y)
+    # a time column is still no input for its name
+    with pytest.raises(ValueError, match="column 't' .* looks like time"):
+        gb.Record(df.assign(t=np.arange(40) * 0.5), y)

@@ -81,7 +81,10 @@ def test_static_points_left_with_the_default_names_beside_named_records_are_told
 
     rng = np.random.default_rng(0)
     rec = gb.Record(rng.uniform(size=(60, 2)), rng.uniform(size=60), input_names=("speed", "valve"))
-    points = gb.StaticPoints(pd.DataFrame({"speed": [0.1, 0.5, 0.9], "valve": [0.2, 0.2, 0.8]}), [1.0, 2.0, 3.0])
+    levels = pd.DataFrame({"speed": [0.1, 0.5, 0.9], "valve": [0.2, 0.2, 0.8]})
+    # a frame's columns now name its inputs (mend61e), as a dict's keys do: these points meet the records
+    assert gb.Dataset(rec, rec, gb.StaticPoints(levels, [1.0, 2.0, 3.0])).static.input_names == ("speed", "valve")
+    points = gb.StaticPoints(levels.to_numpy(), [1.0, 2.0, 3.0])  # an array's columns have no names
     with pytest.raises(ValueError, match=r"has inputs \('u1', 'u2'\).*default names: name them, e\.g\. "
                                          r"StaticPoints\(\.\.\., input_names=\('speed', 'valve'\)\)"):
         gb.Dataset(rec, rec, points)

@@ -290,7 +290,7 @@ def test_a_ramp_named_as_an_input_is_an_input_and_static_levels_are_no_time():
     rec = gb.Record(df[["t", "u"]], df["y"], input_names=("t", "u"))  # named so: the user's own ramp input
     np.testing.assert_array_equal(rec.input("t"), df["t"].to_numpy())
     points = gb.StaticPoints(pd.DataFrame({"a": [1.0, 2.0, 3.0], "b": [5.0, 1.0, 4.0]}), [1.0, 2.0, 3.0])
-    assert points.input_names == ("u1", "u2")  # designed levels in even steps: points, not samples in time
+    assert points.input_names == ("a", "b")  # designed levels in even steps: points, not samples in time
 
 
 def test_a_ramp_input_of_a_frame_by_position_is_told_a_way_to_be_read():

@@ -85,6 +85,21 @@ def points_by_name(x: object, names: Sequence[str] | None, name: str) -> tuple[o
     return frame, (keys if names is None else names)
 
 
+def frame_names(x: object, names: Sequence[str] | None) -> Sequence[str] | None:
+    """The inputs' names of samples or levels ``x``: ``names`` where given (a DataFrame then read by name where its
+    columns are those names, by position where they name none); else a DataFrame's column labels where each is text
+    (``flow``, ``inlet``), as a dict's keys are (:func:`points_by_name`), not pandas' default 0, 1, … nor other
+    numbers; None (the default names ``u`` / ``u1 … um``) for anything else."""
+    if names is not None or not is_frame(x):
+        return names
+    labels = list(x.columns)  # type: ignore[attr-defined]
+    return tuple(labels) if labels and all(isinstance(c, str) for c in labels) else None
+
+
+#: What an input name given by a DataFrame's column is called in messages.
+_COLUMNS_NAME = "the DataFrame's column names, its inputs' names (input_names= names them otherwise, read by position)"
+
+
 def output_series(y: object) -> object | None:
     """``y`` when it is a pandas Series with a name (``df["p"]``), else None: its column is no input."""
     label = getattr(y, "name", None) if _is_series(y) else None
@@ -152,7 +167,7 @@ def _refuse_time_column(x: Any, cols: list, labels: list[str], expected: Sequenc
 
 
 def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: object = None, *,
-                 steady: bool = False, samples: bool = False) -> object:
+                 steady: bool = False, samples: bool = False, own: bool = False) -> object:
     """A DataFrame of inputs with its columns in the order of ``names`` (the one rule for every input).
 
     Columns named exactly as the inputs (every name once, no other column) are read by name, reordered as
@@ -170,7 +185,8 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
     out (:func:`~graybox.core._transient.steady_levels` fills them in): columns naming every other input are read
     by name too, in their order. ``samples``: ``x`` is samples in time (a record's, a free run's), where the one
     column that looks like time or a count of samples (strictly increasing in even steps; the others not) is refused
-    unless it names an input, naming it: read by position it would be an input.
+    unless it names an input, naming it: read by position it would be an input. ``own``: ``names`` are the frame's
+    own columns (:func:`frame_names`), which name no input to that check (a time column is no input for its name).
     """
     by_name = steady and isinstance(x, Mapping)
     if by_name:
@@ -212,7 +228,7 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
                              "input: give its step as Ts=)")
     expected = tuple(default_input_names(len(cols)) if names is None else names)
     if samples and not series and len(cols) > 1:
-        _refuse_time_column(x, cols, labels, expected, name)
+        _refuse_time_column(x, cols, labels, () if own else expected, name)
     known = frozenset(expected)  # a Series of N samples meets N default names (u1 … uN): `in` a tuple made it N²
     hits = [c for c in labels if c in known]
     if series and not hits and isinstance(getattr(x, "name", None), str) and x.name in expected:
@@ -259,7 +275,7 @@ def _default_name(label: str, m: int) -> bool:
 
 
 def as_input_array(x: object, name: str, names: Sequence[str] | None = None, *, output: object = None,
-                   row: str = "sample") -> np.ndarray:
+                   row: str = "sample", own: bool = False) -> np.ndarray:
     """Input samples as a read-only float64 copy: shape (N,) for one input, C-contiguous (N, m) for several.
 
     The one coercion of inputs (records, static points, free runs, static surfaces): a pandas DataFrame
@@ -268,7 +284,7 @@ def as_input_array(x: object, name: str, names: Sequence[str] | None = None, *, 
     (:func:`frame_inputs`; ``output``, the output as a named Series, never an input). A non-finite value is
     said by its ``row`` (``"sample"``, ``"point"``; counted from 0) and its input's name.
     """
-    x = frame_inputs(x, names, name, output, samples=row == "sample")
+    x = frame_inputs(x, names, name, output, samples=row == "sample", own=own)
     refuse_non_real(x, name)
     refuse_flags(x, name, SAMPLES, none=False)  # an on/off input's True read as 1 is the caller's to say
     a = float_array(x, name)
@@ -323,7 +339,10 @@ class Record(Relocked):
     u : array_like or pandas.DataFrame, shape (N,) or (N, m)
         Input samples (engineering units, e.g. rpm); one column per input. One input is
         stored 1-D (an (N, 1) array is flattened), several as a C-contiguous (N, m) array. A
-        DataFrame whose columns are the ``input_names`` (default ``u`` / ``u1 … um``) is read by
+        DataFrame's text column names are the ``input_names`` where those are not given (``df[["flow",
+        "inlet"]]``: the inputs flow and inlet, as a dict's keys name them; one that cannot name an input, such
+        as ``"flow rate"`` or ``"e"``, is refused); pandas' default columns 0, 1 … give the default names. A
+        DataFrame whose columns are the ``input_names`` given is read by
         name, in any column order; one whose columns name none of them, by position; one whose
         columns name some of them is refused (``ValueError`` naming the columns), as is one that
         holds the output's column (``y`` a Series of that name: ``Record(df, df["p"])``) and one with a
@@ -343,8 +362,8 @@ class Record(Relocked):
         identification must name the same ones, and a model fitted on them refuses a record or static points
         that name others (``""``, the default, names none and is never refused).
     input_names : sequence of str, optional
-        The inputs' names as terms use them (default ``("u",)`` for one input, ``u1 … um``
-        for several); identifiers other than y, e, k, none given twice.
+        The inputs' names as terms use them (default: a DataFrame's column names, else ``("u",)`` for one
+        input, ``u1 … um`` for several); identifiers other than y, e, k, none given twice.
     """
 
     u: np.ndarray
@@ -356,7 +375,9 @@ class Record(Relocked):
 
     def __post_init__(self) -> None:
         check_str(self.name, "Record: name")  # a label every message and file carries
-        u = as_input_array(self.u, f"{self.name}: u", self.input_names, output=self.y)
+        given = frame_names(self.u, self.input_names)  # a frame's columns name its inputs, as a dict's keys do
+        own = given is not self.input_names
+        u = as_input_array(self.u, f"{self.name}: u", given, output=self.y, own=own)
         y = as_1d_finite(self.y, f"{self.name}: y")
         if u.shape[0] != y.shape[0]:
             raise ValueError(_lengths(self.name, "u", "y", u, y))
@@ -374,8 +395,8 @@ class Record(Relocked):
         object.__setattr__(self, "Ts", check_real(self.Ts, f"{self.name}: Ts (seconds)", low=0, low_open=True))
         m = 1 if u.ndim == 1 else u.shape[1]
         object.__setattr__(self, "units", check_units(self.units, self.name, m))
-        names = default_input_names(m) if self.input_names is None else check_input_names(
-            self.input_names, m, f"{self.name}: input_names")
+        names = default_input_names(m) if given is None else check_input_names(
+            given, m, f"{self.name}: {_COLUMNS_NAME if own else 'input_names'}")
         object.__setattr__(self, "u", u)
         object.__setattr__(self, "y", y)
         object.__setattr__(self, "input_names", names)
@@ -436,7 +457,8 @@ class StaticPoints(Relocked):
     ----------
     ubar : array_like, pandas.DataFrame or dict, shape (M,) or (M, m)
         Constant input levels (engineering units), all distinct; one column per input (a
-        point ū in input space per row) for several inputs. A DataFrame is read by column name
+        point ū in input space per row) for several inputs. A DataFrame's text column names are the
+        ``input_names`` where those are not given; given, it is read by column name
         where its columns are the ``input_names``, by position where they name none of them, and
         refused where they name some (as :class:`Record`'s ``u``). A dict keyed by input name
         (``{"flow": [1.0, 2.0], "inlet": [20.0, 25.0]}``, as static curves take levels) gives the
@@ -446,7 +468,8 @@ class StaticPoints(Relocked):
     name : str, optional
         A label used in messages.
     input_names : sequence of str, optional
-        The inputs' names (default ``("u",)`` for one input, ``u1 … um`` for several).
+        The inputs' names (default: a DataFrame's column names or a dict's keys, else ``("u",)`` for one
+        input, ``u1 … um`` for several).
     uncertainty : float or array_like of shape (M,), optional
         δ_i, how far the measured ȳ_i may lie from the true steady state, output units (e.g. a
         transmitter's ±0.175 mlc); one number for every point or one per point, each > 0. When
@@ -468,6 +491,8 @@ class StaticPoints(Relocked):
     def __post_init__(self) -> None:
         check_str(self.name, "StaticPoints: name")
         ubar, given = points_by_name(self.ubar, self.input_names, f"{self.name}: ubar")
+        named = frame_names(ubar, given)  # a frame's columns name its inputs, as a dict's keys do
+        own, given = named is not given, named
         u = as_input_array(ubar, f"{self.name}: ubar", given, output=output_series(self.ybar), row="point")
         y = as_1d_finite(self.ybar, f"{self.name}: ybar")
         if u.shape[0] != y.shape[0]:
@@ -479,7 +504,8 @@ class StaticPoints(Relocked):
             raise ValueError(f"{self.name}: duplicated ubar value(s) {listed(uniq[counts > 1].tolist())}; for repeated "
                              "measurements at one level use StaticPoints.from_repeats, which averages them")
         m = 1 if u.ndim == 1 else u.shape[1]
-        names = default_input_names(m) if given is None else check_input_names(given, m, f"{self.name}: input_names")
+        names = default_input_names(m) if given is None else check_input_names(
+            given, m, f"{self.name}: {_COLUMNS_NAME if own else 'input_names'}")
         object.__setattr__(self, "ubar", u)
         object.__setattr__(self, "ybar", y)
         object.__setattr__(self, "input_names", names)
@@ -545,6 +571,7 @@ class StaticPoints(Relocked):
         """
         check_str(name, "StaticPoints: name")
         ubar, input_names = points_by_name(ubar, input_names, f"{name}: ubar")
+        input_names = frame_names(ubar, input_names)  # a frame's columns name its inputs, as a dict's keys do
         u = as_input_array(ubar, f"{name}: ubar", input_names, output=output_series(ybar), row="point")
         y = as_1d_finite(ybar, f"{name}: ybar")
         if u.shape[0] != y.shape[0]:
