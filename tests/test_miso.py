@@ -469,8 +469,9 @@ def test_unnamed_candidates_for_data_of_named_inputs_are_told_how_to_name_them()
 
 
 def test_a_data_frames_column_names_are_its_inputs_names_as_a_dicts_keys_are():
-    # a dict's keys named the inputs (StaticPoints({"flow": …, "inlet": …})) where a DataFrame's columns were dropped:
-    # Record(df[["flow", "inlet"]], y) had the inputs u1, u2, and a structure written in flow(k-1) was refused on it
+    # a dict's keys named the inputs (StaticPoints({"flow": …, "inlet": …})) where a DataFrame's columns were
+    # dropped: Record(df[["flow", "inlet"]], y) had the inputs u1, u2, and a structure written in flow(k-1) was
+    # refused on it
     import pandas as pd
 
     rng = np.random.default_rng(61)

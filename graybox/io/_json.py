@@ -54,7 +54,8 @@ constructor then validates shapes and meaning (e.g. θ's length against the stru
 ``structure`` and ``theta`` (and the noise terms) are the model; its ``equation`` is written from them to 6
 significant digits for the reader, and a file whose equation disagrees with them (θ edited and the equation not, or
 the other way round) is refused naming both: each coefficient must be θ to the 6 significant digits written (or
-to more, where the text shows more), term by term in order (a file without the equation loads). Its ``clusters`` are read and not checked. The units
+to more, where the text shows more), term by term in order (a file without the equation loads). Its ``clusters``
+are read and not checked. The units
 (of u and y) are written when given and read back with :func:`read_header`.
 
 A :class:`~graybox.ParetoSet`'s ``fitted_on`` is saved as a print of each record it was fitted on (its name, length,
@@ -822,10 +823,12 @@ _KINDS = _KINDS | {k + _OR_NONE for k in _KINDS}
 #: The significant digits of a Model's equation in a file.
 _EQUATION_DIGITS = 6
 
-#: Fields written for the reader (not read as the value: a Model's equation is checked against it), per type: their names and how to write them.
+#: Fields written for the reader (not read as the value: a Model's equation is checked against it), per type: their
+#: names and how to write them.
 _READABLE: dict[str, tuple[tuple[str, ...], Callable[[Any], Mapping[str, Any]]]] = {
     "Model": (("equation", "clusters"),
-              lambda m: {"equation": m.equation(digits=_EQUATION_DIGITS), "clusters": {k: _num(v) for k, v in m.clusters().items()}}),
+              lambda m: {"equation": m.equation(digits=_EQUATION_DIGITS),
+                         "clusters": {k: _num(v) for k, v in m.clusters().items()}}),
 }
 
 #: Saved type's name by class, for the classes imported so far (:func:`_type_name` adds the others when met).
@@ -1029,8 +1032,8 @@ def _check_equation(text: str, m: Model, where: str, rd: _Reader) -> None:
         at = (f"; first at term {first + 1}, where it says {'-' if sign < 0 else ''}{coef} {term} and the model "
               f"{float(want[first][0])!r} {want[first][1]}")
     raise rd.fail(where, f"the equation {short(text)} disagrees with the structure and theta, which say "
-                  f"{short(m.equation(digits=_EQUATION_DIGITS))}{at}. The structure and theta are the model; the equation is written "
-                  "from them for the reader: correct it to agree, or remove it")
+                  f"{short(m.equation(digits=_EQUATION_DIGITS))}{at}. The structure and theta are the model; the "
+                  "equation is written from them for the reader: correct it to agree, or remove it")
 
 
 # --------------------------------------------------------------------------------------------
