@@ -153,6 +153,18 @@ def test_seconds_at_rates_near_a_round_fraction_of_a_day_are_not_taken_for_seria
         gb.load_record_csv(f, u="u", y="y", time="t")
 
 
+# Seconds at 24 Hz 10 h into a run (36000.041667 …) step by 1 h of a day exactly, and at 25 or 40 Hz within what a
+# short record's decimals leave unknown of 1 h or 2000 s: they were refused as a spreadsheet's serial dates. Seconds
+# at a usual acquisition rate that fits as well as a round period are seconds (mend61e).
+@pytest.mark.parametrize("rate, start, decimals, n", [(24, 36000, 6, 20), (24, 20000, 6, 200), (24, 100000, 9, 5),
+                                                      (25, 36000, 6, 5), (25, 46000, 2, 3), (40, 36000, 3, 3),
+                                                      (48, 30000, 6, 20), (50, 36000, 2, 4), (60, 36000, 6, 20),
+                                                      (100, 100000, 2, 3), (400, 36000, 4, 5)])
+def test_seconds_at_usual_rates_are_not_taken_for_serial_dates_of_a_round_period(tmp_path, rate, start, decimals, n):
+    f = _csv(tmp_path / "s.csv", [f"{start + k / rate:.{decimals}f}" for k in range(n)])
+    assert gb.load_record_csv(f, u="u", y="y", time="t").Ts == pytest.approx(1 / rate, rel=10.0**-decimals * rate)
+
+
 @pytest.mark.parametrize("year", [1600, 2026, 2300, 9999])
 def test_stamps_of_any_year_are_read_alike(tmp_path, year):
     """numpy's nanosecond dates hold the years 1678-2261 and wrap others silently (2300 read as 1715)."""

@@ -1365,6 +1365,14 @@ def _stamps(p: Path, col: str, cells: Sequence[str], lines: Sequence[int],
 _ROUND_PERIODS = np.array([m * 10.0**e for e in range(-3, 4) for m in (1, 2, 5) if m * 10.0**e <= 3600] + [60, 3600])
 
 
+#: Usual acquisition rates (Hz): 1-2-5 from 1 Hz to 1 MHz, video and mains (24, 25, 30, 48, 60 …), powers of 2 and
+#: audio. Stamps that read as seconds at one of them as well as serial dates of a round period (24 Hz is 1 h of a
+#: day exactly; 25 Hz 3456 s, 40 Hz 2160 s: within what a short record's few decimals leave unknown) are seconds.
+_ACQUISITION_RATES = np.array(sorted({m * 10.0**e for e in range(7) for m in (1, 2, 5) if m * 10.0**e <= 1e6}
+                                     | {24.0, 25.0, 30.0, 40.0, 48.0, 60.0, 120.0, 240.0, 400.0, 4000.0, 11025.0,
+                                        22050.0, 44100.0, 88200.0, 16000.0, 32000.0, 48000.0, 96000.0, 192000.0}
+                                     | {2.0**k for k in range(6, 17)}))
+
 #: MATLAB's datenum (days since year 0) of 1954-01-01 and 2202-01-01: seconds there are 8 days into a run
 _DATENUM_SPAN = (713685, 804265)
 
@@ -1380,7 +1388,12 @@ def _refuse_serial_dates(p: Path, col: str, t: np.ndarray) -> None:
     of a day: 14 % off; 44.1 kHz 1.96 s: 2 %).
     The mean step, not the median: a General cell shows 11 digits, 1e-6 of a day, so 0.1 s steps print as 1e-6 or
     2e-6 (and are uneven), while their mean keeps the period (to 1e-6 day over the record: 4.5 % of 0.1 s at 20
-    samples)."""
+    samples).
+    Stamps that read as seconds at a usual acquisition rate (:data:`_ACQUISITION_RATES`) as closely as they read as
+    serial dates of a round period are seconds, not refused: 24 Hz is 1 h of a day exactly (36000.041667 …, 10 h into
+    a run), and 25 or 40 Hz lie within what a short record's few decimals leave unknown of 1 h or 2000 s. The
+    numbers cannot tell those seconds from hourly serial dates (46000.041667 …), which are read as 24 Hz seconds:
+    give Ts= (and leave time= out) for an hourly record whose stamps are serial dates."""
     ref = (t[-1] - t[0]) / (t.size - 1)
     matlab = _DATENUM_SPAN[0] <= t.min() and t.max() < _DATENUM_SPAN[1]
     if not ((t.min() >= 20000 and t.max() < 110000) or matlab) or not 0 < ref < 1:
@@ -1403,7 +1416,9 @@ def _refuse_serial_dates(p: Path, col: str, t: np.ndarray) -> None:
         # more (100 kHz is 0.864 s of a day: 5 samples of 100000.00001 s steps were refused), and they are not said
         # to be dates past 10 % off a round period; serial dates of steps below their 11 digits repeat
         window = min(window, 0.1)
-    if abs(seconds / near - 1) > window:
+    off = abs(seconds / near - 1)
+    rate = _ACQUISITION_RATES[np.argmin(np.abs(np.log(_ACQUISITION_RATES * ref)))]  # read as seconds: 1/ref Hz
+    if off > window or abs(rate * ref - 1) <= off + 1e-9:  # a tie (24 Hz, 1 h) within the floats' round-off: seconds
         return
     if matlab:
         day = datetime(1, 1, 1) + timedelta(days=float(t[0]) - 367)  # datenum(1, 1, 1) is 367
