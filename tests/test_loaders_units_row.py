@@ -49,9 +49,10 @@ def test_the_units_row_is_checked(tmp_path):
         gb.load_record_csv(two, ["n1", "n2"], "p", time="t", units_row=True, units=("rpm", "Pa"))
     assert gb.load_record_csv(two, ["n1", "n2"], "p", time="t", units_row=True,
                               units=(("rpm", "V"), "Pa")).units == (("rpm", "V"), "Pa")
-    ms = _write(tmp_path / "ms.csv", "t,speed,p\nms,rpm,Pa\n0,1000,2e5\n100,1010,2.01e5\n")
-    with pytest.raises(ValueError, match="time column the unit 'ms', but time stamps are read as seconds"):
-        gb.load_record_csv(ms, "speed", "p", time="t", units_row=True)
+    furlongs = _write(tmp_path / "ms.csv", "t,speed,p\nfortnights,rpm,Pa\n0,1000,2e5\n100,1010,2.01e5\n")
+    with pytest.raises(ValueError, match="time column the unit 'fortnights', but graybox converts the units of "
+                                         "elapsed time s, ms, µs"):
+        gb.load_record_csv(furlongs, "speed", "p", time="t", units_row=True)
     ok = _write(tmp_path / "ok.csv", "t,speed,p\ns,rpm,Pa\n0,1000,2e5\n0.1,1010,2.01e5\n")
     with pytest.raises(ValueError, match=r"units=.*says the input is in 'rad/s', but the units row says 'rpm'"):
         gb.load_record_csv(ok, "speed", "p", time="t", units_row=True, units=("rad/s", "Pa"))
@@ -83,3 +84,31 @@ def test_a_grid_spec_takes_units_row(tmp_path):
     assert data.ident.units == data.valid.units == data.static.units == ("rpm", "Pa")
     with pytest.raises(SpecError, match="units_row"):
         Grid.from_toml_text(spec.replace("units_row = true", 'units_row = "yes"'))
+
+
+# A units row giving a time column of numbers the unit ms (a logger's elapsed milliseconds) was refused ("time stamps
+# are read as seconds"), though the row says how to read them: now converted, per unit, to the seconds of Ts (mend61e)
+@pytest.mark.parametrize("unit, stamps, Ts", [
+    ("ms", ["0", "10", "20", "30"], 0.01), ("[ms]", ["1000", "1100", "1200", "1300"], 0.1),
+    ("µs", ["0", "250", "500", "750"], 250e-6), ("μs", ["0", "250", "500", "750"], 250e-6),
+    ("us", ["5000000", "5001000", "5002000", "5003000"], 1e-3), ("ns", ["0", "500", "1000", "1500"], 5e-7),
+    ("min", ["0", "0.5", "1", "1.5"], 30.0), ("h", ["2", "2.25", "2.5", "2.75"], 900.0),
+    ("d", ["0", "1", "2", "3"], 86400.0),
+    ("s", ["0", "0.5", "1", "1.5"], 0.5),
+])
+def test_a_units_rows_unit_of_elapsed_time_is_converted_to_seconds(tmp_path, unit, stamps, Ts):
+    rows = "".join(f"{t},{1000 + k},{2e5 + k}\n" for k, t in enumerate(stamps))
+    f = _write(tmp_path / "run.csv", f"t,speed,p\n{unit},rpm,Pa\n{rows}")
+    r = gb.load_record_csv(f, "speed", "p", time="t", units_row=True)
+    assert r.Ts == pytest.approx(Ts, rel=1e-12) and r.units == ("rpm", "Pa")
+    # and checked against a Ts given in seconds, as stamps in seconds are
+    assert gb.load_record_csv(f, "speed", "p", time="t", units_row=True, Ts=Ts).Ts == Ts
+    with pytest.raises(ValueError, match="disagrees"):
+        gb.load_record_csv(f, "speed", "p", time="t", units_row=True, Ts=Ts * 1000)
+
+
+def test_dates_given_a_unit_of_elapsed_time_in_the_units_row_are_refused(tmp_path):
+    f = _write(tmp_path / "run.csv",
+               "t,speed,p\nms,rpm,Pa\n2026-11-20 09:14:03,1000,2e5\n2026-11-20 09:14:04,1010,2e5\n")
+    with pytest.raises(ValueError, match=r"unit 'ms', but the time column holds dates or clock times"):
+        gb.load_record_csv(f, "speed", "p", time="t", units_row=True)

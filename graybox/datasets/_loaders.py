@@ -447,14 +447,38 @@ def _unbracket(cell: str) -> str:
     return c if m is None else (m.group(1) if m.group(1) is not None else m.group(2)).strip()
 
 
+#: The units of elapsed time a units row may give a time column of numbers: (multiply, divide) that make them seconds
+#: (a division by 1000 rounds 1010 ms to the float nearest 1.01 s, where a product with 1e-3 rounds twice).
+_TIME_UNITS = {**dict.fromkeys(("", "s", "sec", "secs", "second", "seconds"), (1, 1)),
+               **dict.fromkeys(("ms", "msec", "millisecond", "milliseconds"), (1, 1000)),
+               **dict.fromkeys(("us", "µs", "μs", "usec", "microsecond", "microseconds"), (1, 10**6)),
+               **dict.fromkeys(("ns", "nsec", "nanosecond", "nanoseconds"), (1, 10**9)),
+               **dict.fromkeys(("min", "mins", "minute", "minutes"), (60, 1)),
+               **dict.fromkeys(("h", "hr", "hrs", "hour", "hours"), (3600, 1)),
+               **dict.fromkeys(("d", "day", "days"), (86400, 1))}
+
+
+def _time_in_seconds(p: Path, unit: str, t: np.ndarray, stamps: Sequence[str] | None) -> np.ndarray:
+    """The numbers of a time column whose units row gives ``unit`` as seconds (``ms``, ``µs``/``us``, ``ns``,
+    ``min``, ``h``, ``d`` converted); dates and clock times (``stamps`` not None) carry their own unit: a units row
+    giving them one other than seconds (or ``TS``, a TOA5 file's TIMESTAMP) is refused, as is an unknown unit."""
+    key = unit.strip().lower()
+    if key == "ts" or (stamps is not None and _TIME_UNITS.get(key) == (1, 1)):
+        return t
+    if stamps is None and key in _TIME_UNITS:
+        mul, div = _TIME_UNITS[key]
+        return t * mul if div == 1 else t / div
+    known = "s, ms, µs (us), ns, min, h or d"
+    said = (f"the time column holds dates or clock times ({stamps[0]!r}), which carry their own unit"
+            if stamps is not None else f"graybox converts the units of elapsed time {known} to seconds")
+    raise ValueError(f"{p}: the units row gives the time column the unit {unit!r}, but {said}: convert the column "
+                     "to seconds, or leave time= out and give Ts= in seconds")
+
+
 def _units_from_row(p: Path, units: tuple, row: dict[str, str], inputs: Sequence[str],
                     time: str | None) -> tuple:
     """The (input, output) units a units row gives (the inputs' one unit, or one per input where they differ),
-    checked against ``units`` given too; a time column's unit must be seconds."""
-    # "TS": a TOA5 file's TIMESTAMP, dates and times
-    if time is not None and row.get("time", "").lower() not in ("", "s", "sec", "secs", "second", "seconds", "ts"):
-        raise ValueError(f"{p}: the units row gives the time column the unit {row['time']!r}, but time stamps are "
-                         "read as seconds: convert the column to seconds, or leave time= out and give Ts= in seconds")
+    checked against ``units`` given too (a time column's unit is read by :func:`_time_in_seconds`)."""
     each = tuple(row[r] for r in inputs)
     said = {x for x in each if x}
     # one unit for the inputs (those the row leaves blank say nothing), else one per input, in the inputs' order
@@ -1150,8 +1174,9 @@ def load_record_csv(
         (``s;rpm;Pa``, brackets allowed),
         as data loggers write: it becomes the record's ``units`` (inputs in units of their own keep
         one each, ``(("rpm", "%"), "Pa")``; a ``units=`` that contradicts it is refused; a time
-        column must be in seconds). Without it such a line is refused, naming this option. Default
-        False, True for a TOA5 file (where ``False`` is refused).
+        column of numbers in ``ms``, ``µs`` (``us``), ``ns``, ``min``, ``h`` or ``d`` is converted to seconds, one
+        of dates or clock times must say ``s`` or nothing). Without it such a line is refused, naming this option.
+        Default False, True for a TOA5 file (where ``False`` is refused).
 
     Returns
     -------
@@ -1205,7 +1230,10 @@ def load_record_csv(
     if "_record" in cols:
         _check_record_numbers(p, cols["_record"], lines)
     if time is not None:
-        Ts = _check_time(p, time, cols["time"], lines, Ts, time_rtol, cols.get("_stamps"))
+        t = cols["time"]
+        if "_units" in cols:  # elapsed time in ms, min … as the units row says: seconds
+            t = _time_in_seconds(p, cols["_units"].get("time", ""), t, cols.get("_stamps"))
+        Ts = _check_time(p, time, t, lines, Ts, time_rtol, cols.get("_stamps"))
     return Record(_inputs(cols, ucols), cols["y"], Ts=float(Ts), name=name or p.stem, units=units, input_names=names)
 
 
