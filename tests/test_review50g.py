@@ -84,6 +84,9 @@ def test_equilibria_of_roots_beyond_the_float_range_and_far_out_ones():
     ("name", 5, r"^<json>: object\.fitted_on\[0\]\.name: expected a string, got int$"),
     ("input_names", "u", r"^<json>: object\.fitted_on\[0\]\.input_names: expected a list, got str$"),
     ("block", 0, r"^<json>: object\.fitted_on\[0\]: RecordPrint: need 1 <= block <= length"),
+    # an input named twice, or as the output, which no record's inputs are (loaded as given: mend61e)
+    ("input_names", ["u", "u"], r"^<json>: object\.fitted_on\[0\]: RecordPrint: input_names: input 'u' is named twice"),
+    ("input_names", ["y"], r"^<json>: object\.fitted_on\[0\]: RecordPrint: input_names: input name 'y' is not a valid"),
 ])
 def test_a_damaged_print_is_named_once(field, value, said):
     # a field of the wrong kind was said with its place twice: '<json>: object.fitted_on[0]: <json>:

@@ -1497,10 +1497,9 @@ class RecordPrint(Relocked):
         if d.size != self.length // self.block + 1:
             raise ValueError(f"RecordPrint: {d.size} digests for {self.length} samples in blocks of {self.block} "
                              f"(want {self.length // self.block + 1})")
-        if not self.input_names or not all(isinstance(n, str) for n in self.input_names):
-            raise ValueError("RecordPrint: input_names must name one or more inputs")
+        # the inputs' names as a record's are (a file's print naming one twice, or none, describes no record)
+        object.__setattr__(self, "input_names", check_input_names(self.input_names, what="RecordPrint: input_names"))
         object.__setattr__(self, "digests", locked(d))
-        object.__setattr__(self, "input_names", tuple(self.input_names))
 
 
 def record_print(record: Record) -> RecordPrint:
