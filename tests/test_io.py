@@ -574,6 +574,8 @@ def test_a_long_record_of_awkward_numbers_round_trips_bit_for_bit():
     ("1e-400", r"object\.y\[1\]: the number 1e-400 is not zero but below the smallest float"),
     ("-2.5E-0330", r"object\.y\[1\]: the number -2.5E-0330 is not zero but below the smallest float"),
     ("0." + "0" * 330 + "7", r"object\.y\[1\]: the number 0\.0000.* is not zero but below the smallest float"),
+    ("0.0000001e-318", r"object\.y\[1\]: the number 0\.0000001e-318 is not zero but below the smallest float"),
+    ("2.4e-324", r"object\.y\[1\]: the number 2\.4e-324 is not zero but below the smallest float"),
     ("Infinity", r"y has 1 non-finite value"),  # the literal Python's json writes: the value it names
     ("1" + "0" * 400, r"object\.y\[1\]: a number beyond the float range"),
     ('"x"', r"object\.y\[1\]: expected a number, got the string 'x'"),
