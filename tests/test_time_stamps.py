@@ -165,6 +165,16 @@ def test_seconds_at_usual_rates_are_not_taken_for_serial_dates_of_a_round_period
     assert gb.load_record_csv(f, u="u", y="y", time="t").Ts == pytest.approx(1 / rate, rel=10.0**-decimals * rate)
 
 
+def test_hourly_serial_dates_read_as_24_hz_are_named_where_ts_says_the_hour(tmp_path):
+    # the numbers of hourly serial dates are those of seconds at 24 Hz (read so, as documented); given Ts=3600 the
+    # disagreement said only "whose mean step is 0.0416667 s": now it names the factor of a day and the way out
+    f = _csv(tmp_path / "h.csv", [f"{46000 + k / 24:.10f}" for k in range(30)])
+    with pytest.raises(ValueError, match=r"Ts = 3600 s disagrees .* 0\.0416667 s \(86,400 times: .*serial dates"):
+        gb.load_record_csv(f, u="u", y="y", time="t", Ts=3600.0)
+    with pytest.raises(ValueError, match=r"whose mean step is 0\.0416667 s$"):  # another Ts: no word of dates
+        gb.load_record_csv(f, u="u", y="y", time="t", Ts=1.0)
+
+
 @pytest.mark.parametrize("year", [1600, 2026, 2300, 9999])
 def test_stamps_of_any_year_are_read_alike(tmp_path, year):
     """numpy's nanosecond dates hold the years 1678-2261 and wrap others silently (2300 read as 1715)."""

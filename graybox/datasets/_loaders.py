@@ -1582,7 +1582,10 @@ def _check_time(p: Path, col: str, t: np.ndarray, lines: np.ndarray, Ts: float |
     step = (t[-1] - t[0]) / (t.size - 1)
     if Ts is not None:  # the user's word, checked against the stamps
         if abs(Ts - step) > rtol * step:
-            raise ValueError(f"{p}: Ts = {Ts:g} s disagrees with column {col!r}, whose mean step is {step:g} s")
+            # hourly serial dates read as seconds at 24 Hz (the numbers cannot tell them apart: _refuse_serial_dates)
+            days = (" (86,400 times: the stamps are a spreadsheet's serial dates, days, not seconds? Leave time= out "
+                    "and give Ts=)" if shown is None and abs(Ts / (step * 86400) - 1) <= max(rtol, 1e-3) else "")
+            raise ValueError(f"{p}: Ts = {Ts:g} s disagrees with column {col!r}, whose mean step is {step:g} s{days}")
         return float(Ts)
     # Stamps are printed decimals, so the true step is a short decimal: drop the float noise of the
     # division (e.g. 199.95 / 3999 = 0.049999999999999996 -> 0.05), and the digits the stamps' float64
