@@ -153,11 +153,10 @@ def test_seconds_at_rates_near_a_round_fraction_of_a_day_are_not_taken_for_seria
         gb.load_record_csv(f, u="u", y="y", time="t")
 
 
-# Seconds at 24 Hz 10 h into a run (36000.041667 …) step by 1 h of a day exactly, and at 25 or 40 Hz within what a
-# short record's decimals leave unknown of 1 h or 2000 s: they were refused as a spreadsheet's serial dates. Seconds
-# at a usual acquisition rate that fits as well as a round period are seconds (mend61e).
-@pytest.mark.parametrize("rate, start, decimals, n", [(24, 36000, 6, 20), (24, 20000, 6, 200), (24, 100000, 9, 5),
-                                                      (25, 36000, 6, 5), (25, 46000, 2, 3), (40, 36000, 3, 3),
+# Seconds at 25 or 40 Hz 10 h into a run lie within what a short record's decimals leave unknown of 1 h or 2000 s
+# of a day: they were refused as a spreadsheet's serial dates. Seconds at a usual acquisition rate that fits better
+# than a round period are seconds (mend61e).
+@pytest.mark.parametrize("rate, start, decimals, n", [(25, 36000, 6, 5), (25, 46000, 2, 3), (40, 36000, 3, 3),
                                                       (48, 30000, 6, 20), (50, 36000, 2, 4), (60, 36000, 6, 20),
                                                       (100, 100000, 2, 3), (400, 36000, 4, 5)])
 def test_seconds_at_usual_rates_are_not_taken_for_serial_dates_of_a_round_period(tmp_path, rate, start, decimals, n):
@@ -165,14 +164,24 @@ def test_seconds_at_usual_rates_are_not_taken_for_serial_dates_of_a_round_period
     assert gb.load_record_csv(f, u="u", y="y", time="t").Ts == pytest.approx(1 / rate, rel=10.0**-decimals * rate)
 
 
-def test_hourly_serial_dates_read_as_24_hz_are_named_where_ts_says_the_hour(tmp_path):
-    # the numbers of hourly serial dates are those of seconds at 24 Hz (read so, as documented); given Ts=3600 the
-    # disagreement said only "whose mean step is 0.0416667 s": now it names the factor of a day and the way out
+# 24 Hz is 1 h of a day exactly: the numbers cannot tell such seconds from hourly serial dates, far more common in a
+# plant's logs, which read as seconds would give a period 86,400 times off; refused, saying how to read seconds
+@pytest.mark.parametrize("start, decimals, n", [(36000, 6, 20), (20000, 6, 200), (100000, 9, 5), (46000, 6, 48)])
+def test_stamps_one_hour_of_a_day_apart_stay_refused_saying_how_to_read_24_hz_seconds(tmp_path, start, decimals, n):
+    f = _csv(tmp_path / "s.csv", [f"{start + k / 24:.{decimals}f}" for k in range(n)])
+    with pytest.raises(ValueError, match=r"serial dates .*seconds at 24 Hz, whose steps are 3600 s of a day exactly: "
+                                         r"leave time= out and give Ts=1/24"):
+        gb.load_record_csv(f, u="u", y="y", time="t")
+    assert gb.load_record_csv(f, u="u", y="y", Ts=1 / 24).Ts == pytest.approx(1 / 24)
+
+
+def test_hourly_serial_dates_are_named_whatever_ts_says(tmp_path):
+    # hourly serial dates have the numbers of seconds at 24 Hz: refused as dates with Ts= given too (Ts=3600 said
+    # only "disagrees with the stamps' mean step 0.0416667 s")
     f = _csv(tmp_path / "h.csv", [f"{46000 + k / 24:.10f}" for k in range(30)])
-    with pytest.raises(ValueError, match=r"Ts = 3600 s disagrees .* 0\.0416667 s \(86,400 times: .*serial dates"):
-        gb.load_record_csv(f, u="u", y="y", time="t", Ts=3600.0)
-    with pytest.raises(ValueError, match=r"whose mean step is 0\.0416667 s$"):  # another Ts: no word of dates
-        gb.load_record_csv(f, u="u", y="y", time="t", Ts=1.0)
+    for Ts in (3600.0, 1.0):
+        with pytest.raises(ValueError, match=r"serial dates .* a step of 3600 s\), not seconds"):
+            gb.load_record_csv(f, u="u", y="y", time="t", Ts=Ts)
 
 
 @pytest.mark.parametrize("year", [1600, 2026, 2300, 9999])

@@ -1418,10 +1418,10 @@ def _refuse_serial_dates(p: Path, col: str, t: np.ndarray) -> None:
     2e-6 (and are uneven), while their mean keeps the period (to 1e-6 day over the record: 4.5 % of 0.1 s at 20
     samples).
     Stamps that read as seconds at a usual acquisition rate (:data:`_ACQUISITION_RATES`) as closely as they read as
-    serial dates of a round period are seconds, not refused: 24 Hz is 1 h of a day exactly (36000.041667 …, 10 h into
-    a run), and 25 or 40 Hz lie within what a short record's few decimals leave unknown of 1 h or 2000 s. The
-    numbers cannot tell those seconds from hourly serial dates (46000.041667 …), which are read as 24 Hz seconds:
-    give Ts= (and leave time= out) for an hourly record whose stamps are serial dates."""
+    serial dates of a round period are seconds, not refused: 25 or 40 Hz lie within what a short record's few
+    decimals leave unknown of 1 h or 2000 s. 24 Hz is 1 h of a day exactly (36000.041667 …, 10 h into a run): the
+    numbers cannot tell those seconds from hourly serial dates (46000.041667 …), and they stay refused, the message
+    saying how to read them as seconds."""
     ref = (t[-1] - t[0]) / (t.size - 1)
     matlab = _DATENUM_SPAN[0] <= t.min() and t.max() < _DATENUM_SPAN[1]
     if not ((t.min() >= 20000 and t.max() < 110000) or matlab) or not 0 < ref < 1:
@@ -1446,7 +1446,9 @@ def _refuse_serial_dates(p: Path, col: str, t: np.ndarray) -> None:
         window = min(window, 0.1)
     off = abs(seconds / near - 1)
     rate = _ACQUISITION_RATES[np.argmin(np.abs(np.log(_ACQUISITION_RATES * ref)))]  # read as seconds: 1/ref Hz
-    if off > window or abs(rate * ref - 1) <= off + 1e-9:  # a tie (24 Hz, 1 h) within the floats' round-off: seconds
+    # a tie within the floats' round-off (24 Hz is 1 h of a day exactly) stays refused: hourly serial dates read as
+    # 24 Hz seconds would be a period 86,400 times off without a word; the message says how to load such seconds
+    if off > window or abs(rate * ref - 1) < off - 1e-9:
         return
     if matlab:
         day = datetime(1, 1, 1) + timedelta(days=float(t[0]) - 367)  # datenum(1, 1, 1) is 367
@@ -1464,7 +1466,9 @@ def _refuse_serial_dates(p: Path, col: str, t: np.ndarray) -> None:
                      f"1904 system; a step of {near:g} s), not "
                      "seconds, which would make the sampling period 86,400 times too short; format the column as "
                      "dates and times (2026-11-20 09:14:03.5) before saving the file, convert it to seconds "
-                     "(pandas: (x - x[0]) * 86400), or leave time= out and give Ts=")
+                     "(pandas: (x - x[0]) * 86400), or leave time= out and give Ts="
+                     + (f" (seconds at {rate:g} Hz, whose steps are {near:g} s of a day exactly: leave time= out and "
+                        f"give Ts=1/{rate:g})" if abs(rate * ref - 1) <= 1e-6 else ""))
 
 
 #: Unix time (seconds since 1970-01-01 UTC) of 1980-01-01 and 2100-01-01: counted in ms, µs or ns, the instants
