@@ -1102,7 +1102,9 @@ def pe_uncertainty(
         (g_i ≈ 0) counts for little, where its ȳ-distance s_i/g_i would have decided σ_SF alone. It
         includes any systematic misfit and so errs on the safe side (in a Monte Carlo of noisy points without
         it, λ1 from 1e-3 to 1, the median σ_SF was 0.85–1.01 of the noise's and √mean σ_SF² 0.98–1.19:
-        ``benchmarks/bench_static_sigma.py``).
+        ``benchmarks/bench_static_sigma.py``). An estimate from M points has fewer than M degrees of freedom,
+        which Student's t counts (:attr:`ParameterUncertainty.dof`): with a handful of points the intervals
+        widen a lot (t = 12.7 at one dof); give the transmitter's σ where it is known.
     level : float
         Confidence level of the intervals, in (0, 1).
 
@@ -1283,7 +1285,8 @@ def se_uncertainty(
         Standard deviation of the measured ȳ_i, output units (0 takes the points as exact);
         default: from the member's static misfit, √(M·J_SF / ν) with ν its degrees of freedom (M at
         λ1 = 1; towards M − k as the member comes to meet the points with k free static
-        coefficients; ``ValueError`` when it meets them exactly).
+        coefficients; ``ValueError`` when it meets them exactly). Student's t counts its degrees of freedom (at
+        most M: :attr:`ParameterUncertainty.dof`); give the transmitter's σ where it is known.
     level : float
         Confidence level of the intervals, in (0, 1).
 
