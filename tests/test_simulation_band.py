@@ -224,3 +224,28 @@ def test_a_static_curve_band_is_held_to_what_a_band_can_be():
         with pytest.raises(ValueError, match=field):
             dataclasses.replace(band, **{field: bad})
 
+
+
+def test_monte_carlo_spread_at_one_or_two_degrees_of_freedom_is_the_scale_of_the_draws():
+    # the draws are multivariate t, which has no variance at dof <= 2: their sample std came out 0.19 to 4.0 across
+    # seeds where the delta band's was 0.05 (a PE member's σ_SF from 4-6 points). A map linear in θ (no y term) has
+    # the exact std diag(Φ cov Φᵀ)^½, by hand, which every seed's Monte Carlo std must meet to its sampling error
+    rng = np.random.default_rng(3)
+    st = gb.parse_structure(["u(k-1)", "u(k-2)^2", "1"])
+    A = rng.standard_normal((3, 3))
+    cov = A @ A.T * 1e-4
+    u = rng.uniform(0, 2, 40)
+    k = np.arange(2, 40)
+    ref = np.sqrt(np.einsum("ij,jk,ik->i", np.column_stack([u[k - 1], u[k - 2] ** 2, np.ones(k.size)]), cov,
+                            np.column_stack([u[k - 1], u[k - 2] ** 2, np.ones(k.size)])))
+    ub = np.array([0.5, 1.5])
+    ref_static = np.sqrt(np.einsum("ij,jk,ik->i", np.column_stack([ub, ub**2, np.ones(2)]), cov,
+                                   np.column_stack([ub, ub**2, np.ones(2)])))
+    for dof in (1, 2):
+        unc = gb.ParameterUncertainty(gb.Model(st, [0.5, -0.2, 0.1]), cov, 0.95, dof, 1.0, "LS", np.zeros((0, 3)),
+                                      np.zeros((0, 0)))
+        for seed in (0, 1):
+            b = gb.simulation_band(unc, gb.Record(u, np.zeros(40)), method="monte-carlo", n_samples=2000, seed=seed)
+            np.testing.assert_allclose(b.std[2:], ref, rtol=0.1)
+            s = gb.static_curve_band(unc, ub, method="monte-carlo", n_samples=2000, seed=seed)
+            np.testing.assert_allclose(s.ybar_std, ref_static, rtol=0.1)

@@ -47,7 +47,8 @@ class SimulationBand(Relocked):
     low, high : ndarray, shape (N,)
         The band at :attr:`level`.
     std : ndarray, shape (N,)
-        Standard deviation of ŷ(k) (delta method, or of the Monte Carlo runs).
+        Standard deviation of ŷ(k) (delta method, or of the Monte Carlo runs' deviations from the estimate's,
+        each brought back to the normal draw it came from: the multivariate t's own has none at dof <= 2).
     level : float
     method : str
         ``"delta"`` or ``"monte-carlo"``.
@@ -217,8 +218,12 @@ def simulation_band(
     require_memory(3 * 8 * n_samples * N, f"simulation_band's {n_samples} Monte Carlo free runs of {N} samples",
                    hint="use fewer n_samples, or method='delta' (streamed: its memory does not grow with the draws)")
     rng = np.random.default_rng(seed)
-    Y = simulate_many(st, theta_draws(th, uncertainty.cov, n_samples, rng, dof=uncertainty.dof,
-                                      factor=uncertainty.cov_factor), rec)
+    thetas, w = theta_draws(th, uncertainty.cov, n_samples, rng, dof=uncertainty.dof, factor=uncertainty.cov_factor,
+                            weights=True)
+    # the estimate's run first, by the same kernel: a draw equal to θ̂ then deviates by exactly 0
+    Y = simulate_many(st, np.vstack([th, thetas]), rec)
+    own = np.where(np.isfinite(Y[0]), Y[0], yhat)
+    Y = Y[1:]
     ok = np.all(np.isfinite(Y), axis=1)
     diverged = 1.0 - float(ok.mean())
     if ok.sum() < 2:
@@ -232,7 +237,8 @@ def simulation_band(
              UncertaintyWarning)
     a = (1 - uncertainty.level) / 2
     low, high = np.quantile(Y[ok], [a, 1 - a], axis=0)
-    # spread about the estimate's run: runs that agree give exactly 0, not the round-off of a mean at 2e5 Pa
-    std = (Y[ok] - yhat).std(axis=0)
+    # spread about the estimate's run: runs that agree give exactly 0, not the round-off of a mean at 2e5 Pa; each
+    # deviation times its draw's weight, the normal draw's (the multivariate t has no variance at dof <= 2)
+    std = (w[ok, None] * (Y[ok] - own)).std(axis=0)
     return SimulationBand(rec.t, rec.y, yhat, low, high, std, uncertainty.level, "monte-carlo",
                           n_samples, diverged, m.name, rec.name, units)
