@@ -692,6 +692,9 @@ def test_a_hand_written_array_loads_as_float_reads_each_number(cells, matrix):
     u = [float(a) for a, _, _ in cells]
     y = [float(b) for _, b, _ in cells]
     assume(all(map(np.isfinite, u + y)))  # past the float range: refused, held by the tests above
+    # below it (a number written non-zero that reads as 0.0): refused as well (mend61e), held by the tests above
+    assume(all(v != 0 or float(t.split("e")[0]) == 0 for v, t in zip(u + y, [a for a, _, _ in cells] +
+                                                                        [b for _, b, _ in cells])))
     text = gb.to_json(gb.Record(np.zeros((len(cells), 2)) if matrix else np.zeros(len(cells)), np.zeros(len(cells))))
     doc = json.loads(text)
     u_text = ",".join(f"{s}[{a},{s}{a}]" if matrix else f"{s}{a}" for a, _, s in cells)
