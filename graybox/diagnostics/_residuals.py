@@ -33,28 +33,34 @@ Twenty to forty-one lags are looked at per test. Read lag by lag, even a correct
 5 % of them outside the 95 % band (with 41 lags it leaves the band somewhere in 88 % of records),
 so "no lag outside ±1.96/√N" (``rule="pointwise"``, the literature's reading taken literally)
 fails correct models most of the time. The default, ``rule="simultaneous"``, asks the question
-at the 95 % level for the test as a whole: a test fails when some lag lies outside
-±z/√N with z the Bonferroni quantile for its number of lags (z = 3.23 for 41 lags; valid whatever
-the correlation between lags, e.g. with a slow step input). Either way the result lists every lag
-outside the classic ±1.96/√N band, and the figure draws both lines.
+at the 95 % level for the test as a whole: a test fails when its largest |φ| over the lags exceeds
+a limit set by permutation. The residuals are shuffled within each record B times (199 at 95 %, 999 at
+99 %: ``(B + 1)(1 − level) = 10``, seeded by ``seed``), each test's φ recomputed on every shuffle, and
+the limit is the smallest of the 10 largest of the B shuffles' max |φ|: the test fails when the record's own
+max |φ| exceeds it, i.e. is among the 10 largest of the B + 1 (a p-value of at most 10/(B + 1)). For a model
+that explains the data, ξ is white noise independent of u, every order of its samples is as likely as
+the recorded one, and the test fails a correct model with probability at most 1 − level, exactly, whatever
+the tails of u and ξ and however the lags correlate (a held input). Shuffling keeps the residuals' own
+tails, so a skewed, heavy-tailed input and noise widen the limit as much as they widen φ, and a slow
+input's correlated lags narrow it.
 
-The Bonferroni z reads each φ as normal, and far out in its tail (a lag's share of the 5 %: 0.12 % for
-41 lags), where a sum of products of heavy-tailed factors is not: u'² of a Gaussian input and ξ² of
-Gaussian noise each have kurtosis 15, and φ_(u²)'ξ² with the normal z rejected 9–10 % of white records
-(N = 500–1000; 13–22 % with Laplace or Student-t noise). The simultaneous limit therefore solves the
-Edgeworth expansion of the two-sided tail, 2(1 − Φ(c)) + 2φ(c)[κ He₃(c)/(24N) + γ² He₅(c)/(72N)], for the
-lag's share, with κ = (κ_a − 3)(κ_b − 3) − 6 and γ = γ_a γ_b from the kurtosis and skewness of the test's two
-sequences a and b, measured on the data: N times the excess kurtosis, and √N times the skewness, of a sum of
-products normalised by both sequences' norms (−6, lighter than normal tails, where either sequence is Gaussian:
-b / ‖b‖ is then uniform on the sphere; with an impulse input and Gaussian noise φ_uξ is a normal residual over
-‖ξ‖, and keeps the normal limit). It is never below the
-Bonferroni z (light tails, a uniform input, keep it), and on those records brings the rejections back to
-4–6 %. The expansion is in powers of κ/N, which is not small where both sequences are skewed and heavy-tailed
-(κ/N of 2–3 for φ_(u²)'ξ² with a chi-square input and noise): its limit is too narrow there, and a correct model
-fails φ_(u²)'ξ² in 17–22 % of white records with a chi-square or exponential input and noise (N = 500–2000;
-45–51 % under the Bonferroni z), in 8 % with a Gaussian input and chi-square noise (N = 100–500), 10 % with
-Student-t noise of 3 degrees of freedom (N = 500; 600–800 records each). The pointwise band stays the literature's
-±1.96/√N.
+Normal limits do not: a sum of products of skewed, heavy-tailed factors is far from normal out in the tail
+where a lag's share of the 5 % lies (0.12 % for 41 lags). A Bonferroni limit ±z/√N (z = 3.23 for 41 lags),
+and the same with an Edgeworth term in the products' kurtosis and skewness (the limit of graybox until
+2026-11-29, which files written then keep, ``permutations = 0``), failed a correct model's φ_(u²)'ξ² in
+13–20 % of records with a chi-square input and noise and in 18–23 % with Student-t input and noise of 3
+degrees of freedom (N = 200–2000, ``benchmarks/bench_residual_tests.py --families``); the permutation limit
+fails it in 2–7 % of those records (5 % up to the sampling error of 300 records), and is as sharp where the
+normal limit was right. The price: a test can fail only where its φ stands out from what the record's own
+residuals give in another order. With an impulse input, φ_uξ(τ) is one residual per lag, and a model with
+the wrong gain fails only if the residual after the impulse is among the largest of the record's: with 41
+lags and fewer than 820 samples it never fails (41 of N is more than 5 % of the draws; a normal limit would
+fail it, by assuming normal noise). The pointwise band stays the literature's ±1.96/√N.
+
+:attr:`CorrelationTest.excess_kurtosis` and :attr:`CorrelationTest.skewness` say how heavy-tailed the products
+are: N times the excess kurtosis, and √N times the skewness, of a sum of products normalised by both
+sequences' norms, (κ_a − 3)(κ_b − 3) − 6 and γ_a γ_b from the two sequences' own (−6 where either is
+Gaussian: b / ‖b‖ is then uniform on the sphere). Only a file of an older graybox's limit depends on them.
 
 What the 95 % promises, measured (``benchmarks/bench_residual_tests.py``, BENCHMARKS.md: a NARX
 system with white equation noise, N = 1000, 200 records). With the system's own parameters, each
@@ -97,9 +103,9 @@ from ..core._regressors import record_signals, regressor_matrix
 from ..core._simulation_kernels import inverse_ma_filter
 from ..core._reprs import percent_text
 from ..estimation._extended_least_squares import _ma_invertible, _ma_text
-from ..core._least_squares import binary_scaled, scaled_theta
+from ..core._least_squares import binary_scaled, one_blas_thread, scaled_theta
 from ..core._validation import (Relocked, FrozenMap, check_agrees, check_bool, check_choice, check_fields, check_int,
-                                check_level, check_real, frozen, warn)
+                                check_level, check_real, check_seed, frozen, warn)
 
 if TYPE_CHECKING:  # pandas takes ~0.4 s to import: loaded where a table is made
     import pandas as pd
@@ -155,8 +161,9 @@ class CorrelationTest(Relocked):
     band : float
         The pointwise confidence half-width z_{(1+level)/2}/√N (1.96/√N at 95 %).
     limit : float
-        The half-width the pass/fail rule uses (``band`` for the pointwise rule, the Bonferroni
-        half-width for the simultaneous one, widened for heavy tails: ``excess_kurtosis``).
+        The half-width the pass/fail rule uses, in φ's units (at most 1): ``band`` for the pointwise rule; for
+        the simultaneous one the largest |φ| over the lags that the residuals in shuffled order reach in
+        (1 − level) of ``permutations`` + 1 draws (see the module docstring).
     outside : ndarray of int
         Lags where |φ| > ``band``.
     passed : bool
@@ -164,8 +171,12 @@ class CorrelationTest(Relocked):
     excess_kurtosis, skewness : float
         N times the excess kurtosis, and √N times the skewness, of φ at a lag were the test's two sequences a
         and b independent: (κ_a − 3)(κ_b − 3) − 6 and γ_a γ_b from their own kurtosis and skewness (−6 where
-        either is Gaussian; 0 in a file of an older graybox: the Bonferroni limit either way). They set the
-        simultaneous rule's tail correction (see the module docstring).
+        either is Gaussian; 0 in a file of an older graybox): how heavy-tailed the products are. They set the
+        limit only of a simultaneous test with ``permutations = 0``, from a file of an older graybox (the
+        Bonferroni half-width with an Edgeworth term in them).
+    permutations : int
+        The shuffles of the residuals the simultaneous limit was set on (199 at 95 %, 999 at 99 %); 0 for the
+        pointwise rule and in a file of an older graybox.
     """
 
     name: str
@@ -179,6 +190,7 @@ class CorrelationTest(Relocked):
     passed: bool
     excess_kurtosis: float = 0.0
     skewness: float = 0.0
+    permutations: int = 0
 
     def __post_init__(self) -> None:
         check_fields(self)
@@ -208,6 +220,9 @@ class CorrelationTest(Relocked):
         check_real(self.limit, "limit", low=0, low_open=True)
         check_real(self.excess_kurtosis, "excess_kurtosis")
         check_real(self.skewness, "skewness")
+        check_int(self.permutations, "permutations", low=0)
+        if self.permutations and self.limit > 1:  # a limit on |φ| ≤ 1 set by permuted correlations
+            raise ValueError(f"limit = {self.limit:g} of a permutation test must be at most 1 (|phi| <= 1)")
         if outside.ndim != 1 or not np.array_equal(outside, lags[np.abs(phi) > self.band]):
             raise ValueError(f"outside must list the lags where |phi| > band ({lags[np.abs(phi) > self.band].tolist()}), "
                              f"got {outside.tolist()}")
@@ -296,7 +311,15 @@ class ResidualTests(Relocked):
             check_agrees(t.band, band, f"band of tests[{k!r}]", f"level = {self.level!r} and n = {self.n} (z/√n)")
             if self.rule == "pointwise":
                 check_agrees(t.limit, band, f"limit of tests[{k!r}]", "the pointwise rule's band and its level and n")
-            else:
+                if t.permutations:
+                    raise ValueError(f"tests[{k!r}] says its limit was set on {t.permutations} permutations, but the "
+                                     "pointwise rule's is the band (permutations = 0)")
+            elif t.permutations:
+                # the permutations' maxima need the inputs, which a result does not keep: their count is checked
+                if t.permutations != _permutations(self.level):
+                    raise ValueError(f"permutations of tests[{k!r}] is {t.permutations}, but residual_tests sets the "
+                                     f"limit at level = {self.level!r} on {_permutations(self.level)}")
+            else:  # a file of an older graybox: the Bonferroni limit, its tails corrected by an Edgeworth term
                 limit = _simultaneous_limit(self.level, t.lags.size, self.n, t.excess_kurtosis, t.skewness)
                 check_agrees(t.limit, limit, f"limit of tests[{k!r}]", f"the simultaneous rule over its {t.lags.size} "
                              f"lags at level = {self.level!r}, n = {self.n}, excess_kurtosis = "
@@ -495,6 +518,7 @@ def residual_tests(
     level: float = 0.95,
     rule: str = "simultaneous",
     moving_average: bool = True,
+    seed: int = 0,
 ) -> ResidualTests:
     """The five correlation tests of Billings & Voon on a model's one-step residuals.
 
@@ -510,12 +534,14 @@ def residual_tests(
     level : float
         Confidence level in (0, 1) of the band (0.95: ±1.96/√N).
     rule : {"simultaneous", "pointwise"}
-        How a test passes: every lag within the Bonferroni band at ``level`` for the test as a
-        whole, its tails corrected for the sequences' kurtosis (default), or every lag within the
-        pointwise ±1.96/√N band (see the module docstring for why the pointwise rule fails correct
-        models).
+        How a test passes: every lag within a limit at ``level`` for the test as a whole, set by
+        shuffling the residuals (default: exact for a correct model whatever the tails of u and ξ), or
+        every lag within the pointwise ±1.96/√N band (see the module docstring for why the pointwise rule
+        fails correct models).
     moving_average : bool
         Include the model's MA part in the residuals (default; see :func:`one_step_residuals`).
+    seed : int
+        Seed of the shuffles that set the simultaneous limit (default 0: the same verdict on every call).
 
     Returns
     -------
@@ -529,7 +555,8 @@ def residual_tests(
         A record shorter than the model's lags plus ``max_lag`` + 2, constant residuals (within
         1e-10 of the largest |y|, round-off: a model that reproduces the data exactly has nothing
         to test), every input constant, a record sampled at another period than the model was identified
-        at, an MA part whose residual recursion grows without bound (not invertible), bad options.
+        at, an MA part whose residual recursion grows without bound (not invertible), a level above
+        0.9999 under the simultaneous rule (more than 9999 shuffles), bad options.
 
     Notes
     -----
@@ -541,6 +568,7 @@ def residual_tests(
     moving_average = check_bool(moving_average, "moving_average")
     level = check_level(level)
     check_choice(rule, "rule", RULES)
+    seed = check_seed(seed)
     recs = records_of(data, "valid")
     names = recs[0].input_names
     xi, us = [], []
@@ -595,45 +623,155 @@ def residual_tests(
              + "; ".join(f"{k} ({why})" for k, why in undefined.items()), UserWarning)
     from scipy import stats  # slow to import: loaded where used
     z = stats.norm.ppf(0.5 + level / 2)
-    if rule == "simultaneous" and not np.isfinite(stats.norm.ppf(1 - (1 - level) / (2 * (2 * max_lag + 1)))):
-        raise ValueError(f"level = {level!r} is too close to 1 for the simultaneous rule over {2 * max_lag + 1} lags: "
-                         "its Bonferroni quantile is infinite in floats (a band no correlation can leave)")
+    if rule == "simultaneous" and level > _max_level():
+        raise ValueError(f"level = {level!r} is too close to 1 for the simultaneous rule: its limit is set on at most "
+                         f"{_MAX_PERMUTATIONS} permutations of the residuals, which hold no test beyond level = "
+                         f"{_max_level():.6g} (rule='pointwise' takes it)")
     band = float(z / np.sqrt(n))
-    out = {}
     # φ is the same for ξ in any units: in units of its largest magnitude, its squares and products neither
     # underflow nor overflow (y in units of 1e-100 made Σξ²·Σξ² 0, φ_ξξ NaN)
     xmax = float(np.max(np.abs(allxi)))
     xs = [e / xmax for e in xi]
-    # with several inputs every input test is made for each input (keys "u_xi:u1", …)
-    per_input = [(None, 0)] if len(names) == 1 else [(nm, j) for j, nm in enumerate(names)]
-    for key, (_, kind, side) in TESTS.items():
+    # with several inputs every input test is made for each input (keys "u_xi:u1", …); the tests to make as
+    # (key, test, input column; −1 for φ_ξξ), and u in units of its own spread for each input they use (u² of
+    # 1e3 rpm would otherwise lose digits to the mean removal)
+    keys = [(key + ("" if len(names) == 1 or key == "xi_xi" else f":{nm}"), key, -1 if key == "xi_xi" else j)
+            for key in TESTS for j, nm in (enumerate(names[:1]) if key == "xi_xi" else enumerate(names))]
+    keys = [(k, key, j) for k, key, j in keys if k not in undefined]
+    uc = {j: [_standardised(u[:, j], allu[:, j]) for u in us] for j in {j for _, _, j in keys if j >= 0}}
+    limits = {}
+    if rule == "simultaneous":
+        with one_blas_thread():  # small products: a multi-threaded BLAS only adds synchronisation (5× slower)
+            limits = _permutation_limits(xs, uc, keys, max_lag, level, seed)
+    permutations = _permutations(level) if rule == "simultaneous" else 0
+    out = {}
+    for k, key, j in keys:
+        _, kind, side = TESTS[key]
         lags = _lags(side, max_lag)
-        for nm, j in ([(None, 0)] if key == "xi_xi" else per_input):
-            k = key if nm is None else f"{key}:{nm}"
-            if k in undefined:
-                continue
-            # u in units of its own spread: u² of 1e3 rpm would otherwise lose digits to the mean removal
-            col = allu[:, j]
-            uc = [_standardised(u[:, j], col) for u in us]
-            if key == "xi_xi":
-                a, b, shift = xs, xs, 0
-            elif key == "u_xi":
-                a, b, shift = uc, xs, 0
-            elif key == "xi_xiu":
-                a, b, shift = [e * u for e, u in zip(xs, uc)], xs, 1
-            elif key == "u2_xi":
-                a, b, shift = [u**2 for u in uc], xs, 0
-            else:
-                a, b, shift = [u**2 for u in uc], [e**2 for e in xs], 0
-            phi = _xcorr(a, b, lags + shift)
-            kurt, skew = _product_shape(a, b)
-            limit = band if rule == "pointwise" else _simultaneous_limit(level, lags.size, n, kurt, skew)
-            lab = _label_of(k)
-            outside = lags[np.abs(phi) > band]
-            out[k] = CorrelationTest(k, lab, kind, _ro(lags), _ro(phi), band, limit, _ro(outside),
-                                     bool(np.all(np.abs(phi) <= limit)), kurt, skew)
+        if key == "xi_xi":
+            a, b, shift = xs, xs, 0
+        elif key == "u_xi":
+            a, b, shift = uc[j], xs, 0
+        elif key == "xi_xiu":
+            a, b, shift = [e * u for e, u in zip(xs, uc[j])], xs, 1
+        elif key == "u2_xi":
+            a, b, shift = [u**2 for u in uc[j]], xs, 0
+        else:
+            a, b, shift = [u**2 for u in uc[j]], [e**2 for e in xs], 0
+        phi = _xcorr(a, b, lags + shift)
+        kurt, skew = _product_shape(a, b)
+        limit = limits.get(k, band)
+        outside = lags[np.abs(phi) > band]
+        out[k] = CorrelationTest(k, _label_of(k), kind, _ro(lags), _ro(phi), band, limit, _ro(outside),
+                                 bool(np.all(np.abs(phi) <= limit)), kurt, skew, permutations)
     return ResidualTests(FrozenMap(out), n, level, rule, getattr(model, "name", ""),
                          tuple(_ro(e) for e in xi), FrozenMap(undefined))
+
+#: Exceedances of the permutation limit at ``level``: (B + 1)(1 − level) permuted maxima lie at or above it, 10
+#: where the cap allows (B = 199 at 95 %, 999 at 99 %), at least 1 (an exact test needs one), B at most 9999.
+_EXCEED, _MAX_PERMUTATIONS = 10, 9999
+
+
+def _permutations(level: float) -> int:
+    """B, the permutations the simultaneous limit at ``level`` is set on (see ``_EXCEED``)."""
+    return int(min(max(np.ceil(_EXCEED / (1 - level) - 1e-9) - 1, 99), _MAX_PERMUTATIONS))
+
+
+def _max_level() -> float:
+    """The largest level whose permutation limit _MAX_PERMUTATIONS permutations can set (one maximum above it)."""
+    return 1 - 1 / (_MAX_PERMUTATIONS + 1)
+
+
+def _permutation_limits(xs: list[np.ndarray], uc: dict[int, list[np.ndarray]], keys: list[tuple[str, str, int]],
+                        max_lag: int, level: float, seed: int) -> dict[str, float]:
+    """Per test, the limit on max_τ |φ(τ)| that a level-``level`` permutation test sets: the residuals permuted
+    within each record B times (``_permutations``), every test's φ recomputed on each permutation (as ``_xcorr``:
+    means removed over all records, products within records), and the limit the order statistic of the B maxima
+    above which (B + 1)(1 − level) − 1 of them lie. Exact under the null (ξ independent and identically
+    distributed within each record, independent of u), whatever the tails of u and ξ and the correlation between
+    lags (a held input), as a Bonferroni limit is not.
+
+    ``keys`` holds (key, test, input column; −1 for φ_ξξ) of the tests to make, ``uc`` each input column's u' per
+    record."""
+    from scipy import fft  # slow to import: loaded where used
+
+    B = _permutations(level)
+    rng = np.random.default_rng(seed)
+    sizes = [x.size for x in xs]
+    gap = max_lag + 2  # zeros between records: no lag up to max_lag + 1 (φ_ξ(ξu)'s shift) pairs two records
+    starts = np.cumsum([0] + [n + gap for n in sizes[:-1]]).astype(int)
+    width = int(starts[-1] + sizes[-1])
+    where = np.concatenate([s0 + np.arange(n) for s0, n in zip(starts, sizes)])  # the samples' places in a row
+    nfft = fft.next_fast_len(width + max_lag + 2, real=True)
+
+    def laid(parts: list[np.ndarray]) -> np.ndarray:
+        out = np.zeros(width)
+        out[where] = np.concatenate(parts)
+        return out
+
+    def centred(x: np.ndarray) -> np.ndarray:  # means over the samples only, the gaps kept zero
+        return np.where(np.isin(np.arange(width), where), x - np.mean(x[where]), 0.0)
+
+    def lagged(a: np.ndarray, lags: np.ndarray) -> np.ndarray:  # (width, lags): column i is a(k − τ_i) at row k
+        out = np.zeros((width, lags.size))
+        for i, t in enumerate(lags):
+            out[max(t, 0):width + min(t, 0), i] = a[max(-t, 0):width - max(t, 0)]
+        return out
+
+    xi = laid(xs)
+    # permuting ξ moves neither its mean nor its norm, nor ξ²'s: only φ_ξ(ξu)'s product ξu' changes its own
+    xic, xi2c = centred(xi), centred(xi**2)
+    norm = {"xi": np.sqrt(xic @ xic), "xi2": np.sqrt(xi2c @ xi2c)}
+    fixed = {}  # per input: u', and u'(k − τ) and u'²(k − τ) at each lag over their norms where a test made uses them
+    made = {(t, j) for _, t, j in keys}
+    for j in {j for _, _, j in keys if j >= 0}:
+        u, u2 = centred(laid(uc[j])), centred(laid([x**2 for x in uc[j]]))
+        lags = _lags("both", max_lag)
+        fixed[j] = (laid(uc[j]), lagged(u, lags) / np.sqrt(u @ u) if ("u_xi", j) in made else None,
+                    # (u'² of a balanced two-level input is constant: its tests are not made, nor divided by 0)
+                    lagged(u2, lags) / np.sqrt(u2 @ u2) if {("u2_xi", j), ("u2_xi2", j)} & made else None)
+    maxima = {k: np.empty(B) for k, _, _ in keys}
+    chunk = max(1, 2**20 // nfft)
+    pos, pos1 = _lags("positive", max_lag), _lags("nonnegative", max_lag) + 1  # φ_ξξ's; φ_ξ(ξu)'s, shifted
+    for lo in range(0, B, chunk):
+        m = min(chunk, B - lo)
+        idx = np.empty((m, where.size), dtype=np.intp)  # each row a permutation within each record
+        for s0, n, c0 in zip(starts, sizes, np.cumsum([0] + sizes[:-1])):
+            idx[:, c0:c0 + n] = rng.permuted(np.broadcast_to(where[c0:c0 + n], (m, n)), axis=1)
+        rows = _placed(xic, idx, where, width)
+        f_xi = None
+        for k, t, j in keys:
+            if t == "u_xi":
+                phi = rows @ fixed[j][1] / norm["xi"]
+            elif t == "u2_xi":
+                phi = rows @ fixed[j][2] / norm["xi"]
+            elif t == "u2_xi2":
+                phi = _placed(xi2c, idx, where, width) @ fixed[j][2] / norm["xi2"]
+            else:
+                # Σ_k a(k−τ) ξ(k) at every τ of a permuted a: the cross-correlation of the zero-padded rows by FFT
+                if f_xi is None:
+                    f_xi = fft.rfft(rows, nfft, axis=1)
+                if t == "xi_xi":
+                    c = fft.irfft(np.abs(f_xi) ** 2, nfft, axis=1)[:, pos] / norm["xi"] ** 2
+                else:
+                    a = xi[idx] * fixed[j][0][where]
+                    a = _placed(a - np.mean(a, axis=1, keepdims=True), slice(None), where, width)
+                    na = np.sqrt(np.einsum("ij,ij->i", a, a))[:, None]
+                    c = fft.irfft(np.conj(fft.rfft(a, nfft, axis=1)) * f_xi, nfft, axis=1)[:, pos1]
+                    c = np.divide(c, na * norm["xi"], out=np.zeros_like(c), where=na > 0)
+                phi = c
+            maxima[k][lo:lo + m] = np.max(np.abs(phi), axis=1)
+    rank = B - int(np.floor((B + 1) * (1 - level) + 1e-9))  # (B + 1)(1 − level) − 1 maxima lie above it
+    return {k: float(np.sort(v)[rank]) for k, v in maxima.items()}
+
+
+def _placed(x: np.ndarray, idx: np.ndarray | slice, where: np.ndarray, width: int) -> np.ndarray:
+    """Rows x[idx] laid at the places ``where`` of rows of ``width`` (zero in the gaps between records)."""
+    if where.size == width:  # one record: no gaps
+        return x[idx]
+    out = np.zeros((*np.shape(x[idx])[:-1], width))
+    out[..., where] = x[idx]
+    return out
 
 
 def _product_shape(a: list[np.ndarray], b: list[np.ndarray]) -> tuple[float, float]:
@@ -657,7 +795,9 @@ def _product_shape(a: list[np.ndarray], b: list[np.ndarray]) -> tuple[float, flo
 
 
 def _simultaneous_limit(level: float, n_lags: int, n: int, excess_kurtosis: float, skewness: float) -> float:
-    """The half-width c/√n that each of ``n_lags`` lags exceeds with probability (1 − level)/n_lags: c from the
+    """The simultaneous limit of a file of an older graybox (``permutations = 0``), which its tests are held to.
+
+    The half-width c/√n that each of ``n_lags`` lags exceeds with probability (1 − level)/n_lags: c from the
     Edgeworth expansion of the two-sided tail of Z = √n φ of excess kurtosis κ/n and skewness γ/√n,
 
         P(|Z| > c) = 2(1 − Φ(c)) + 2φ(c) [κ He₃(c) / (24 n) + γ² He₅(c) / (72 n)],

@@ -751,7 +751,8 @@ _CODECS: dict[str, tuple[type | str, tuple[tuple[str, str], ...]]] = {
     "CorrelationTest": (CorrelationTest, (("name", "str"), ("label", "str"), ("kind", "str"), ("lags", "int_array1"),
                                           ("phi", "array1"), ("band", "float"), ("limit", "float"),
                                           ("outside", "int_array1"), ("passed", "bool"),
-                                          ("excess_kurtosis", "float"), ("skewness", "float"))),
+                                          ("excess_kurtosis", "float"), ("skewness", "float"),
+                                          ("permutations", "int"))),
     "ResidualTests": (ResidualTests, (("tests", "correlation_tests"), ("n", "int"), ("level", "float"), ("rule", "str"),
                                       ("model_name", "str"), ("residuals", "arrays"), ("undefined", "texts"))),
     "GAOptions": (GAOptions, (("population", "int"), ("generations", "int"), ("stall", "int_or_none"),
@@ -880,8 +881,9 @@ _ADDED: dict[str, dict[str, Any]] = {"ELSResult": {"n_direct": 0}, "Decision": {
                                      "StaticPoints": {"units": _DEFAULT},
                                      "StaticCurveBand": {"units": _DEFAULT}, "StaticSurfaceBand": {"units": _DEFAULT},
                                      # the sequences' tails, carried since hunt59d: normal ones (the Bonferroni
-                                     # limit those files hold)
-                                     "CorrelationTest": {"excess_kurtosis": 0.0, "skewness": 0.0}}
+                                     # limit those files hold); the permutations the limit was set on, since
+                                     # stats61f: none (the Bonferroni limit, or its Edgeworth tails)
+                                     "CorrelationTest": {"excess_kurtosis": 0.0, "skewness": 0.0, "permutations": 0}}
 
 #: Fields that files written by an older graybox carry and this one no longer has: read and dropped.
 #: A GrayboxSelection named the SQLite store its cells ran in; it no longer runs through a store.
