@@ -324,16 +324,17 @@ def test_the_permutations_recompute_each_test_as_the_direct_formula(monkeypatch)
 
     rng = np.random.default_rng(3)
     xs = [rng.standard_normal(57), rng.chisquare(1, 80)]
-    u = [rng.chisquare(2, 57), rng.standard_normal(80)]
-    keys = [(k, k, -1 if k == "xi_xi" else 0) for k in R.TESTS]
+    inputs = {0: [rng.chisquare(2, 57), rng.standard_normal(80)], 1: [rng.uniform(size=57), rng.laplace(size=80)]}
+    keys = [("xi_xi", "xi_xi", -1)] + [(f"{k}:{j}", k, j) for k in list(R.TESTS)[1:] for j in inputs]
     monkeypatch.setattr(R.np.random, "default_rng", Identity)
-    limits = R._permutation_limits(xs, {0: u}, keys, 5, 0.95, 0)
+    limits = R._permutation_limits(xs, inputs, keys, 5, 0.95, 0)
     monkeypatch.undo()
-    seqs = {"xi_xi": (xs, xs, 0), "u_xi": (u, xs, 0), "xi_xiu": ([e * v for e, v in zip(xs, u)], xs, 1),
-            "u2_xi": ([v**2 for v in u], xs, 0), "u2_xi2": ([v**2 for v in u], [e**2 for e in xs], 0)}
-    for k, (a, b, shift) in seqs.items():
+    for key, k, j in keys:
+        u = inputs[max(j, 0)]
+        a, b, shift = {"xi_xi": (xs, xs, 0), "u_xi": (u, xs, 0), "xi_xiu": ([e * v for e, v in zip(xs, u)], xs, 1),
+                       "u2_xi": ([v**2 for v in u], xs, 0), "u2_xi2": ([v**2 for v in u], [e**2 for e in xs], 0)}[k]
         lags = R._lags(R.TESTS[k][2], 5)
-        assert limits[k] == pytest.approx(np.max(np.abs(_xcorr(a, b, lags + shift))), rel=1e-10), k
+        assert limits[key] == pytest.approx(np.max(np.abs(_xcorr(a, b, lags + shift))), rel=1e-10), key
 
 
 def test_the_tests_keep_their_size_with_heavy_tailed_input_and_noise():

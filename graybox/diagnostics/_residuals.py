@@ -766,7 +766,8 @@ def _permutation_limits(xs: list[np.ndarray], uc: dict[int, list[np.ndarray]], k
                 phi = c
             maxima[k][lo:lo + m] = np.max(np.abs(phi), axis=1)
     rank = B - int(np.floor((B + 1) * (1 - level) + 1e-9))  # (B + 1)(1 − level) − 1 maxima lie above it
-    return {k: float(np.sort(v)[rank]) for k, v in maxima.items()}
+    # (|φ| <= 1: FFT round-off of a degenerate record's could exceed it by an ulp)
+    return {k: min(float(np.sort(v)[rank]), 1.0) for k, v in maxima.items()}
 
 
 def _placed(x: np.ndarray, idx: np.ndarray | slice, where: np.ndarray, width: int) -> np.ndarray:
