@@ -107,7 +107,7 @@ from ..core._regressors import record_signals, regressor_matrix
 from ..core._simulation_kernels import inverse_ma_filter
 from ..core._reprs import percent_text
 from ..estimation._extended_least_squares import _ma_invertible, _ma_text
-from ..core._least_squares import binary_scaled, one_blas_thread, scaled_theta
+from ..core._least_squares import binary_scaled, scaled_theta
 from ..core._validation import (Relocked, FrozenMap, check_agrees, check_bool, check_choice, check_fields, check_int,
                                 check_level, check_real, check_seed, frozen, warn)
 
@@ -643,10 +643,7 @@ def residual_tests(
             for key in TESTS for j, nm in (enumerate(names[:1]) if key == "xi_xi" else enumerate(names))]
     keys = [(k, key, j) for k, key, j in keys if k not in undefined]
     uc = {j: [_standardised(u[:, j], allu[:, j]) for u in us] for j in {j for _, _, j in keys if j >= 0}}
-    limits = {}
-    if rule == "simultaneous":
-        with one_blas_thread():  # small products: a multi-threaded BLAS only adds synchronisation (5× slower)
-            limits = _permutation_limits(xs, uc, keys, max_lag, level, seed)
+    limits = _permutation_limits(xs, uc, keys, max_lag, level, seed) if rule == "simultaneous" else {}
     permutations = _permutations(level) if rule == "simultaneous" else 0
     out = {}
     for k, key, j in keys:
@@ -716,45 +713,37 @@ def _permutation_limits(xs: list[np.ndarray], uc: dict[int, list[np.ndarray]], k
     def centred(x: np.ndarray) -> np.ndarray:  # means over the samples only, the gaps kept zero
         return np.where(np.isin(np.arange(width), where), x - np.mean(x[where]), 0.0)
 
-    def lagged(a: np.ndarray, lags: np.ndarray) -> np.ndarray:  # (width, lags): column i is a(k − τ_i) at row k
-        out = np.zeros((width, lags.size))
-        for i, t in enumerate(lags):
-            out[max(t, 0):width + min(t, 0), i] = a[max(-t, 0):width - max(t, 0)]
-        return out
-
     xi = laid(xs)
     # permuting ξ moves neither its mean nor its norm, nor ξ²'s: only φ_ξ(ξu)'s product ξu' changes its own
     xic, xi2c = centred(xi), centred(xi**2)
     norm = {"xi": np.sqrt(xic @ xic), "xi2": np.sqrt(xi2c @ xi2c)}
-    fixed = {}  # per input: u', and u'(k − τ) and u'²(k − τ) at each lag over their norms where a test made uses them
+    fixed = {}  # per input: u', and the conjugate transforms of u' and u'² over their norms where a test uses them
     made = {(t, j) for _, t, j in keys}
     for j in {j for _, _, j in keys if j >= 0}:
         u, u2 = centred(laid(uc[j])), centred(laid([x**2 for x in uc[j]]))
-        lags = _lags("both", max_lag)
-        fixed[j] = (laid(uc[j]), lagged(u, lags) / np.sqrt(u @ u) if ("u_xi", j) in made else None,
+        fixed[j] = (laid(uc[j]), np.conj(fft.rfft(u, nfft)) / np.sqrt(u @ u) if ("u_xi", j) in made else None,
                     # (u'² of a balanced two-level input is constant: its tests are not made, nor divided by 0)
-                    lagged(u2, lags) / np.sqrt(u2 @ u2) if {("u2_xi", j), ("u2_xi2", j)} & made else None)
+                    np.conj(fft.rfft(u2, nfft)) / np.sqrt(u2 @ u2) if {("u2_xi", j), ("u2_xi2", j)} & made else None)
     maxima = {k: np.empty(B) for k, _, _ in keys}
     chunk = max(1, 2**20 // nfft)
-    pos, pos1 = _lags("positive", max_lag), _lags("nonnegative", max_lag) + 1  # φ_ξξ's; φ_ξ(ξu)'s, shifted
+    # the lags of φ_ξξ, φ_ξ(ξu) (shifted) and the input tests as places in a cross-correlation (τ < 0 at its end)
+    pos, pos1, both = _lags("positive", max_lag), _lags("nonnegative", max_lag) + 1, _lags("both", max_lag) % nfft
     for lo in range(0, B, chunk):
         m = min(chunk, B - lo)
         idx = np.empty((m, where.size), dtype=np.intp)  # each row a permutation within each record
         for s0, n, c0 in zip(starts, sizes, np.cumsum([0] + sizes[:-1])):
             idx[:, c0:c0 + n] = rng.permuted(np.broadcast_to(where[c0:c0 + n], (m, n)), axis=1)
-        rows = _placed(xic, idx, where, width)
-        f_xi = None
+        # Σ_k a(k−τ) b(k) at every τ: the cross-correlation of the zero-padded rows, by FFT
+        f_xi = fft.rfft(_placed(xic, idx, where, width), nfft, axis=1)
+        f_xi2 = None
         for k, t, j in keys:
-            if t == "u_xi":
-                phi = rows @ fixed[j][1] / norm["xi"]
-            elif t == "u2_xi":
-                phi = rows @ fixed[j][2] / norm["xi"]
+            if t in ("u_xi", "u2_xi"):
+                phi = fft.irfft(fixed[j][1 if t == "u_xi" else 2] * f_xi, nfft, axis=1)[:, both] / norm["xi"]
             elif t == "u2_xi2":
-                phi = _placed(xi2c, idx, where, width) @ fixed[j][2] / norm["xi2"]
+                if f_xi2 is None:
+                    f_xi2 = fft.rfft(_placed(xi2c, idx, where, width), nfft, axis=1)
+                phi = fft.irfft(fixed[j][2] * f_xi2, nfft, axis=1)[:, both] / norm["xi2"]
             else:
-                # Σ_k a(k−τ) ξ(k) at every τ of a permuted a: the cross-correlation of the zero-padded rows by FFT
-                if f_xi is None:
-                    f_xi = fft.rfft(rows, nfft, axis=1)
                 if t == "xi_xi":
                     c = fft.irfft(np.abs(f_xi) ** 2, nfft, axis=1)[:, pos] / norm["xi"] ** 2
                 else:
