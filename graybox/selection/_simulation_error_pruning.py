@@ -418,7 +418,11 @@ def _semp_centred(candidates: Structure, data: Record | Sequence[Record] | Datas
     theta, _ = _centring.least_squares(closed, centred, L)
     recs = centred if isinstance(centred, list) else [centred]
     model = Model(closed, theta, **carried_from(recs))
-    err = np.concatenate([model.simulate(r, r.y[:L], on_diverge="nan")[L:] - r.y[L:] for r in recs])
+    # from each record's measured y(0) … y(L-1), as the search's runs start (its own max_lag would simulate the
+    # samples between: the same model scored otherwise than with centre=False)
+    a = L - model.max_lag
+    err = np.concatenate([model.simulate(r.slice(a, len(r)), on_diverge="nan")[model.max_lag:] - r.y[L:]
+                          for r in recs])
     # a free run that diverges scores inf, as in the search (the closure's extra terms can make it unstable)
     score = float(np.mean(err * err)) if np.all(np.isfinite(err)) else math.inf
     if not math.isfinite(score):
