@@ -143,3 +143,25 @@ def test_centred_score_is_the_free_run_from_the_candidates_first_lag_samples():
     raw = gb.semp(Candidates(4, 4, ne=0, degree=1), recs, n_terms=3)
     assert set(raw.structure) == set(res.structure)
     assert res.score == pytest.approx(raw.score, rel=1e-9)
+
+
+def test_a_small_free_run_error_at_a_large_output_level_is_not_taken_for_round_off():
+    # noise-free y near 1e6 with a spread near 1: leaving out u(k-1)^2 (θ 1e-4) errs by 3.5e-5 RMS, some 1.6e5 ulps of
+    # the level, where the exact structure errs by about 4; the round-off floor of 1e-20 of the output's mean square
+    # (4.5e5 ulps) took the 3-term model for an exact fit (its score the floor, 1e-8, not its MSE 1.2e-9), and
+    # n_terms=4 chose u(k-2), a term the system does not have
+    rng = np.random.default_rng(0)
+    u = rng.uniform(-1.0, 1.0, 300)
+    true = Structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"])
+    y = Model(true, [5e5, 0.5, 1.0, 1e-4]).simulate(u, [1e6])
+    rec = Record(u, y)
+    cands = Structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2", "u(k-2)", "y(k-2)"])
+    assert set(gb.semp(cands, rec, n_terms=4).structure) == set(true)
+    res = gb.semp(cands, rec, tol=1e-12)
+    assert set(res.structure) == set(true)
+    three = gb.semp(cands, rec, n_terms=3)
+    m = three.model
+    # by hand: its free run from the measured y(1) (L = 2, the candidates' largest lag), its errors from y(2) on
+    mse = float(np.mean((m.simulate(rec.slice(1, 300))[1:] - y[2:]) ** 2))
+    assert 1e-10 < mse < 1e-8
+    assert three.score == pytest.approx(mse, rel=1e-6)

@@ -54,6 +54,9 @@ from ..core._validation import (Relocked, FrozenFrame, check_bool, check_choice,
 
 __all__ = ["semp", "SEMPResult"]
 
+#: The free-run MSE that is round-off, as a fraction of the output's mean square: (2^13 ulps)^2.
+ROUND_OFF_MS = (2.0**13 * np.finfo(float).eps) ** 2
+
 
 @dataclass(frozen=True, eq=False)
 class SEMPResult(Relocked):
@@ -170,8 +173,11 @@ class _Scorer:
         self.own = np.einsum("ij,ij->j", self.R[:, :-1], self.R[:, :-1])  # ‖s_j‖²: N, or 0 for a zero column
         # the tolerance's scale: var(y), or for a constant output its mean square (not 1 output unit²)
         self.yvar = output_scale(y) ** 2
-        # free-run errors below this are round-off, not signal: such structures tie (noise-free data)
-        self.floor = 1e-20 * max(float(np.mean(y**2)), np.finfo(float).tiny)
+        # free-run errors below this are round-off, not signal: such structures tie (noise-free data). In ulps of the
+        # output's level, where round-off lives: exact structures' runs erred by up to 2.4e3 ulps RMS (slow plants,
+        # rho 0.999, 2000 samples, y + 1e6); 1e-20 of the mean square (4.5e5 ulps) took a run 3.5e-5 off at y near 1e6
+        # (1.6e5 ulps) for an exact one, and scored it 1e-8 for its 1.2e-9
+        self.floor = ROUND_OFF_MS * max(float(np.mean(y**2)), np.finfo(float).tiny)
 
     def fit(self, S: Sequence[int]) -> np.ndarray | None:
         """θ (engineering units, full candidate length) of the LS fit of terms S, or None if singular."""
@@ -283,7 +289,7 @@ def semp(
         Size of the structure to return.
     tol : float, optional
         Relative free-run error in (0, 1) that ends the search (met too by a free run at round-off,
-        1e-20 of the output's mean square: an exact fit meets a tolerance below it).
+        (2^13 ulps)² of the output's mean square, 3.3e-24 of it: an exact fit meets a tolerance below it).
     criterion : {"aic", "bic", "fpe", "ebic"}, optional
         Information criterion of the free-run error (see :func:`graybox.information_criterion`; default
         ``"bic"``; EBIC's p counts the candidates besides the included ones, the all-zero ones and those
