@@ -288,3 +288,17 @@ def test_els_names_the_terms_a_held_input_leaves_free_as_the_other_estimators_do
         gb.els(gb.Structure(["y(k-1)", "u(k-1)", "1", "e(k-1)"]), rec)
     with pytest.raises(ValueError, match=r"not identifiable from the identification records.*\['u\(k-1\)', '1'\]"):
         gb.cls(gb.Structure(["y(k-1)", "u(k-1)", "1"]), rec)
+
+
+def test_noise_regressors_zero_on_every_row_are_named_as_such():
+    # records of max_lag + 1 samples: each has one row, whose residual lags fall on the first max_lag samples (taken
+    # as 0); the MA columns are zero, which ELS called "collinear with the process terms or each other (rank 0 < 2)"
+    rng = np.random.default_rng(0)
+    recs = [Record(rng.uniform(-1.0, 1.0, 3), rng.uniform(-1.0, 1.0, 3)) for _ in range(40)]
+    with pytest.raises(ValueError, match=r"e\(k-1\), e\(k-2\) (is|are) zero on every row.*3 samples"):
+        els(Structure(["y(k-1)", "u(k-1)"]), recs, noise=2)
+    # four samples: e(k-1) has one nonzero row per record, e(k-2) none
+    recs = [Record(rng.uniform(-1.0, 1.0, 4), rng.uniform(-1.0, 1.0, 4)) for _ in range(40)]
+    with pytest.raises(ValueError, match=r"e\(k-2\) is zero on every row") as info:
+        els(Structure(["y(k-1)", "u(k-1)"]), recs, noise=2)
+    assert "e(k-1)," not in str(info.value)

@@ -423,6 +423,26 @@ def _regression(process: Structure, ns: Structure, recs: list[Record]) -> _Regre
     return _Regression(process, ns, recs, L, psi, y, bounds)
 
 
+def _refuse_zero_noise_columns(reg: _Regression, E: np.ndarray) -> None:
+    """ValueError naming the noise terms whose column is zero on every row (said as "collinear, rank 0" before), and
+    why where the records are too short: residuals before sample L of a record are 0, so e(k-l) needs one longer
+    than L + l."""
+    zero = [t for t, z in zip(reg.ns, ~np.any(E, axis=0)) if z]
+    if not zero:
+        return
+    longest = max(len(r) for r in reg.recs)
+    lag = max(l for s, l, _ in zero[0].factors if s == "e")  # the first one's longest residual lag
+    names = ", ".join(str(t) for t in zero)
+    verb = "is" if len(zero) == 1 else "are"
+    if all(longest <= reg.L + max(l for s, l, _ in t.factors if s == "e") for t in zero):
+        why = (f"the residuals of each record's first {reg.L} samples (the largest lag) have no regression row and "
+               f"are taken as 0, and the longest record has {longest} samples, where {zero[0]} needs more than "
+               f"{reg.L} + {lag}; give longer records or a shorter MA part (noise=)")
+    else:
+        why = "its other factors vanish where the residuals do not; leave it out of the MA part (noise=)"
+    raise ValueError(f"ELS: the noise regressor(s) {names} {verb} zero on every row: {why}")
+
+
 class _ExtendedFit:
     """The least-squares step of ELS, with Ψ factored once.
 
@@ -443,6 +463,7 @@ class _ExtendedFit:
         """One ELS least-squares step with ``x`` in the noise regressors: (θ, c, ξ̃, change)."""
         Q, m_e = self.Q, len(self.reg.ns)
         E = self.reg.noise_regressors(x)
+        _refuse_zero_noise_columns(self.reg, E)
         se = column_scales(E)
         Es = E / se
         B = Q.T @ Es
