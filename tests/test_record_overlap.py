@@ -153,7 +153,7 @@ def test_the_same_data_in_other_units_or_rounded_by_another_tool_is_refused():
     y = gb.Model(gb.Structure(["y(k-1)", "u(k-1)", "1"]), np.array([0.7, 0.4, 0.1])).simulate(u, np.zeros(1))
     y = y + 0.01 * rng.standard_normal(u.size)
     ident = gb.Record(u, y, name="ident")
-    for other, what in [(gb.Record(u, 1e3 * y), "y = 1000·y"), (gb.Record(u, y + 273.15), "y = y + 273.15"),
+    for other, what in [(gb.Record(u, 1e3 * y), "y = 1000·y"), (gb.Record(u, 1.8 * y + 32.0), "y = 1.8·y + 32"),
                         (gb.Record(60.0 * u[100:300], y[100:300]), "u = 60·u"),
                         (gb.Record(np.array([float(f"{v:.6g}") for v in u[50:]]),
                                    np.array([float(f"{v:.6g}") for v in y[50:]]) - 0.0), "rounded"),
@@ -166,6 +166,9 @@ def test_the_same_data_in_other_units_or_rounded_by_another_tool_is_refused():
     # is said, not refused; independent records are neither
     with pytest.warns(gb.RecordOverlapWarning, match="scaled"):
         check_overlap(gb.Record(2.0 * u, 2.0 * y), ident, "test", "identification", "test on other data")
+    # y from another zero alone (y + 273.15) is what an integrating plant's run from another level gives: said
+    with pytest.warns(gb.RecordOverlapWarning, match=r"offset \(its y = the other's \+ 273.15"):
+        check_overlap(gb.Record(u, y + 273.15), ident, "test", "identification", "test on other data")
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         check_overlap(_record(1, 400), ident, "test", "identification", "test on other data")
@@ -194,3 +197,25 @@ def test_select_graybox_refuses_a_test_or_validation_record_that_is_the_fitting_
                           test=gb.Record(u[200:600], 1e3 * y[200:600]))
     with pytest.raises(ValueError, match=r"validation record .* in other units \(its u = 60 × the other's"):
         gb.select_graybox(cand, gb.Dataset(ident, gb.Record(60.0 * u[:800], y[:800]), None), band=np.inf, sizes=[2])
+
+
+def test_separate_runs_whose_signals_differ_by_an_offset_alone_are_said_not_refused():
+    """An integrating plant run twice on one designed input from other levels gives outputs that differ by a
+    constant, and a plant that answers its input's changes only (a washout) gives one output at inputs offset by a
+    constant: separate experiments, which were refused as the other record in other units (y + 3, u + 5). An
+    offset alone is said; a scale on one side alone (y·1000 at the same inputs) is still refused."""
+    u = gb.design_input("aprbs", 300, low=0.0, high=10.0, hold=(5, 20), seed=0)
+    tank = gb.Model(gb.Structure(["y(k-1)", "u(k-1)"]), np.array([1.0, 0.5]))
+    ident = gb.Record(u, tank.simulate(u, np.zeros(1)), name="from 0")
+    again = gb.Record(u, tank.simulate(u, np.array([3.0])), name="from 3")
+    np.testing.assert_allclose(again.y - ident.y, 3.0, rtol=0, atol=1e-9)  # an offset, independently of graybox
+    with pytest.warns(gb.RecordOverlapWarning, match=r"its y = the other's \+ 3"):
+        check_overlap(again, ident, "test", "identification", "x")
+    washout = gb.Model(gb.Structure(["y(k-1)", "u(k-1)", "u(k-2)"]), np.array([0.8, 1.0, -1.0]))
+    low = gb.Record(u, washout.simulate(u, np.zeros(2)), name="low")
+    high = gb.Record(u + 5.0, washout.simulate(u + 5.0, np.zeros(2)), name="high")
+    np.testing.assert_allclose(high.y, low.y, rtol=0, atol=1e-9)
+    with pytest.warns(gb.RecordOverlapWarning, match=r"its u = the other's \+ 5"):
+        check_overlap(high, low, "test", "identification", "x")
+    with pytest.raises(ValueError, match="other units"):
+        check_overlap(gb.Record(u, 1e3 * ident.y), ident, "test", "identification", "x")

@@ -1371,10 +1371,11 @@ def rescaled_stretch(a: Record, b: Record) -> tuple[tuple[int, int, int], list[t
 
 
 def _check_rescaled(a: Record, b: Record, a_name: str, b_name: str, advice: str, prefix: str) -> None:
-    """:func:`check_overlap` for :func:`rescaled_stretch`: refused where the inputs are the other's and the output is
-    not, or the output is and an input is not (no experiment gives that), or every signal is the other's up to
-    rounding; said (a :class:`RecordOverlapWarning`) where both are changed: other units, or a run of an affine plant
-    at affinely mapped inputs."""
+    """:func:`check_overlap` for :func:`rescaled_stretch`: refused where every signal is the other's up to rounding, or
+    where one side (the inputs, or the output) is the other's and a signal of the other side is scaled (no experiment
+    gives y·1000 at the same inputs); said (a :class:`RecordOverlapWarning`) where both sides are changed (other
+    units, or a run of an affine plant at affinely mapped inputs), or one side by offsets alone (an integrating
+    plant's run from another level, a washout plant's at another input level)."""
     found = rescaled_stretch(a, b)
     if found is None:
         return
@@ -1393,10 +1394,20 @@ def _check_rescaled(a: Record, b: Record, a_name: str, b_name: str, advice: str,
             + (f"up to rounding (to {_RESCALED_TOL:g} of each signal's spread)" if all(kept)
                else f"in other units ({how}, to {_RESCALED_TOL:g} of each signal's spread)")
             + f": its samples {i}..{i + n - 1} are samples {j}..{j + n - 1} of the other")
-    if all(kept) or kept[-1] or all(kept[:-1]):
+    scaled = any(abs(s - 1.0) > 1e-4 for s, _ in maps)
+    if all(kept) or (scaled and (kept[-1] or all(kept[:-1]))):
         raise ValueError(f"{prefix}{said}: {advice}")
-    warn(f"{prefix}{said.replace('in other units', 'scaled')}. A run of a linear (or affine) plant at inputs "
-         f"mapped so gives such outputs; if it is the {b_name} data in other units instead, {advice}",
+    if scaled:
+        warn(f"{prefix}{said.replace('in other units', 'scaled')}. A run of a linear (or affine) plant at inputs "
+             f"mapped so gives such outputs; if it is the {b_name} data in other units instead, {advice}",
+             RecordOverlapWarning)
+        return
+    # offsets alone on one side: an integrating plant run again from another level (or under another constant
+    # load) gives outputs offset so at the same inputs, a plant that answers its inputs' changes only one output at
+    # inputs offset so; separate experiments as likely as one record from another zero
+    warn(f"{prefix}{said.replace('in other units', 'offset')}. An integrating plant run again from another level "
+         "(or under another constant load) gives outputs offset so, and a plant that answers its inputs' changes "
+         f"only one output at inputs offset so; if it is the {b_name} data from another zero instead, {advice}",
          RecordOverlapWarning)
 
 
