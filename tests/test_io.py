@@ -576,6 +576,9 @@ def test_a_long_record_of_awkward_numbers_round_trips_bit_for_bit():
     ("0." + "0" * 330 + "7", r"object\.y\[1\]: the number 0\.0000.* is not zero but below the smallest float"),
     ("0.0000001e-318", r"object\.y\[1\]: the number 0\.0000001e-318 is not zero but below the smallest float"),
     ("2.4e-324", r"object\.y\[1\]: the number 2\.4e-324 is not zero but below the smallest float"),
+    # a long number is shown by its head and its tail, the exponent kept ("0.000…0001" was shown for 1e-340)
+    ("0." + "0" * 39 + "1e-300", r"the number 0\.0000000000…0000001e-300 is not zero but below the smallest float"),
+    ("1." + "0" * 40 + "e400", r"the number 1\.0000000000…00000000e400 is beyond the float range"),
     ("Infinity", r"y has 1 non-finite value"),  # the literal Python's json writes: the value it names
     ("1" + "0" * 400, r"object\.y\[1\]: a number beyond the float range"),
     ('"x"', r"object\.y\[1\]: expected a number, got the string 'x'"),

@@ -1226,11 +1226,12 @@ def _held(text: str) -> str | None:
     float range (float() reads 1e400 as inf) or, not zero, below the smallest subnormal (1e-400 read as 0.0), so that a
     hand-written number would load as another one."""
     x = float(text)
+    shown = text if len(text) <= 30 else f"{text[:12]}…{text[-12:]}"  # its head and its exponent
     if math.isinf(x):
-        return (f"the number {text[:30]} is beyond the float range (an infinite value is written \"inf\" or "
+        return (f"the number {shown} is beyond the float range (an infinite value is written \"inf\" or "
                 "\"-inf\")")
     if x == 0.0 and re.search("[1-9]", re.split("[eE]", text)[0]):
-        return (f"the number {text[:30]} is not zero but below the smallest float (5e-324), and would read as 0.0 "
+        return (f"the number {shown} is not zero but below the smallest float (5e-324), and would read as 0.0 "
                 "(write 0 where zero is meant)")
     return None
 
