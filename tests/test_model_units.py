@@ -226,3 +226,19 @@ def test_inputs_in_units_of_their_own_survive_a_file_and_label_the_plots(tmp_pat
     pts = gb.StaticPoints(np.array([[2.0, 0.0], [5, 0.0], [8, 0.0]]), np.array([6.0, 7, 8]), input_names=("q", "T"),
                           units=each)
     assert gb.plots.plot_static_curve(pts).axes[0].get_xlabel() == "input q (l/min)"
+
+
+def test_a_pareto_set_reads_a_records_inputs_by_name_with_their_units():
+    # ParetoSet.check_record compared the inputs' units by position: a record with its columns the other way round
+    # (T, q) and its units with them, which every member simulates as the set's own, was refused ('l/min' vs '°C')
+    each = (("l/min", "°C"), "m")
+    rec = _two_inputs(each)
+    pts = gb.StaticPoints(np.array([[2.0, 30], [5, 40], [8, 50]]), np.array([1.6, 2.25, 3.0]), input_names=("q", "T"),
+                          units=each)
+    ps = gb.pe_pareto(gb.Structure(["y(k-1)", "q(k-1)", "T(k-1)"]), rec, pts, lambdas=[0.5])
+    other = _two_inputs(each, seed=4)
+    swapped = gb.Record(other.u[:, ::-1], other.y, Ts=2.0, units=(("°C", "l/min"), "m"), input_names=("T", "q"))
+    ps.check_record(swapped)
+    np.testing.assert_allclose(gb.js(ps.member_model(0), swapped), gb.js(ps.member_model(0), other))
+    with pytest.raises(ValueError, match=r"input 'T' unit '°C' but 'run 4' has 'K'"):
+        ps.check_record(_two_inputs((("l/min", "K"), "m"), seed=4))

@@ -276,7 +276,7 @@ class ParetoSet(Relocked):
         """``ValueError`` when ``record`` (or static points) was sampled at another period than the set was fitted
         at, or is in other units where both name them (as :meth:`graybox.Model.check_record`)."""
         check_fitted_on(self.Ts, self.units, "the Pareto set was fitted", record,
-                        "its members' parameters hold in those units only; convert the data")
+                        "its members' parameters hold in those units only; convert the data", self.input_names)
 
     # -- access -------------------------------------------------------------------------
     def __len__(self) -> int:
