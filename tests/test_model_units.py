@@ -242,3 +242,21 @@ def test_a_pareto_set_reads_a_records_inputs_by_name_with_their_units():
     np.testing.assert_allclose(gb.js(ps.member_model(0), swapped), gb.js(ps.member_model(0), other))
     with pytest.raises(ValueError, match=r"input 'T' unit '°C' but 'run 4' has 'K'"):
         ps.check_record(_two_inputs((("l/min", "K"), "m"), seed=4))
+
+
+def test_units_given_to_save_per_input_are_checked_against_the_values_inputs_and_filled_by_its_own():
+    each = (("l/min", "°C"), "m")
+    m = gb.els(gb.Structure(["y(k-1)", "q(k-1)", "T(k-1)"]), _two_inputs(each)).model
+    # three input units for a model of two inputs raised IndexError ('tuple index out of range')
+    with pytest.raises(ValueError, match="3 input units .* 2 input"):
+        gb.to_json(m, units=(("l/min", "°C", "bar"), "m"))
+    hand = gb.Model(gb.Structure(["y(k-1)", "q(k-1)", "T(k-1)"]), np.array([0.5, 0.1, 0.02]))
+    with pytest.raises(ValueError, match="3 input units .* 2 input"):
+        gb.to_json(hand, units=(("l/min", "°C", "bar"), "m"))
+    # units naming fewer than the value's are filled by its own, input by input (the header said '' for T)
+    assert json.loads(gb.to_json(m, units=(("l/min", ""), "")))["units"] == {"u": ["l/min", "°C"], "y": "m"}
+    # a header edited to list three input units for the model's two is refused as a file's error, not an IndexError
+    doc = json.loads(gb.to_json(m))
+    doc["units"]["u"] = ["l/min", "°C", "bar"]
+    with pytest.raises(gb.GrayboxFileError, match="header"):
+        gb.from_json(json.dumps(doc))

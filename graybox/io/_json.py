@@ -1083,7 +1083,9 @@ def _read_units(rd: Any, v: Any, where: str) -> tuple:
     return (ins, rd.str(pair[1], f"{where}[1]"))
 
 
-def _units_arg(units: tuple | Mapping[str, Any] | None) -> dict | None:
+def _units_arg(units: tuple | Mapping[str, Any] | None, m: int | None = None) -> dict | None:
+    """``units=`` of :func:`to_json` as the header's ``{"u", "y"}``, checked (one input unit per input where they are
+    listed and the value's ``m`` inputs are known)."""
     if units is None:
         return None
     if isinstance(units, Mapping):
@@ -1091,13 +1093,33 @@ def _units_arg(units: tuple | Mapping[str, Any] | None) -> dict | None:
         if other:  # dropped, they would leave the header without the units meant
             raise ValueError(f"units: unknown key(s) {', '.join(other)}; a mapping of units has the keys 'u' and 'y'")
         units = (units.get("u", ""), units.get("y", ""))
-    u, y = check_units(units, "the file's header")  # a str is one unit, not a pair: never split into its letters
+    u, y = check_units(units, "the file's header", m)  # a str is one unit, not a pair: never split into its letters
     return {"u": u if isinstance(u, str) else list(u), "y": y}
+
+
+def _n_inputs(obj: Any, own: tuple | None) -> int | None:
+    """How many inputs a value to save has (its or its model's ``input_names``, else as many as its own units list),
+    or None where it does not say."""
+    for v in (obj, getattr(obj, "model", None)):
+        names = getattr(v, "input_names", None)
+        if isinstance(names, tuple):
+            return len(names)
+    return None if own is None or isinstance(own[0], str) else len(own[0])
+
+
+def _filled(said: tuple, own: tuple) -> tuple:
+    """Units ``said`` where they name one, the value's ``own`` elsewhere, input by input (they do not contradict:
+    :func:`_contradicts`)."""
+    n = max(_n_units(said), _n_units(own))
+    each = [input_unit(said, j) or input_unit(own, j) for j in range(n)]
+    return check_units((each, said[1] or own[1]), "units")
 
 
 def _contradicts(said: Sequence, own: Sequence) -> bool:
     """Whether units ``said`` (input, output) name another unit than a value's ``own`` where both name one (an
-    empty unit says nothing; inputs in units of their own, input by input)."""
+    empty unit says nothing; inputs in units of their own, input by input; lists of as many inputs as they are)."""
+    if 1 < _n_units(said) != _n_units(own) > 1:
+        return True
     return any(input_unit(said, j) and input_unit(own, j) and input_unit(said, j) != input_unit(own, j)
                for j in range(max(_n_units(said), _n_units(own)))) or bool(said[1] and own[1] and said[1] != own[1])
 
@@ -1122,15 +1144,16 @@ def _own_units(obj: Any) -> tuple[str, str] | None:
     return None
 
 
-def to_json(obj: Any, *, units: tuple[str, str] | Mapping[str, str] | None = None) -> str:
+def to_json(obj: Any, *, units: tuple | Mapping[str, Any] | None = None) -> str:
     """The JSON text of a graybox value (see the module docstring for the layout).
 
     Parameters
     ----------
     obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, OEResult, SEMPResult, ParameterUncertainty, StaticCurveBand, StaticSurfaceBand, SimulationBand, CLSResult, GAOptions, ResidualTests, CorrelationTest, DecisionBootstrap, StaticPoints, StaticCurve, StaticSurface, Equilibrium, LocalModel, OperatingCurve, Record, Dataset, Structure, DecimationAdvice or GrayboxSelection
         The value to write.
-    units : (str, str) or mapping, optional
-        Units of the input and output: a pair of str (e.g. ``("rpm", "mlc")``, or a Record's ``units``) or a
+    units : tuple or mapping, optional
+        Units of the input and output: a pair (e.g. ``("rpm", "mlc")``, or a Record's ``units``; the input's one
+        str, or one per input: ``(("l/min", "°C"), "m")``) or a
         mapping with the keys ``"u"`` and ``"y"`` (a missing one: no unit said), written
         in the header; default: the units the value carries (a Record's, StaticPoints', a model's or a
         result's, a Dataset's records'), when it names any. Given for a value that carries units of
@@ -1156,14 +1179,14 @@ def to_json(obj: Any, *, units: tuple[str, str] | Mapping[str, str] | None = Non
                            "type": _type_name(type(obj))}
     own = _own_units(obj)
     given = units
-    u = _units_arg(units)
+    u = _units_arg(units, _n_inputs(obj, own))
     if own is not None and any(own):  # the header says what the value itself carries, never another unit
-        said = ("", "") if u is None else (u["u"], u["y"])
+        said = ("", "") if u is None else (u["u"] if isinstance(u["u"], str) else tuple(u["u"]), u["y"])
         if _contradicts(said, own):
             raise ValueError(f"units={given!r} contradicts the units the {type(obj).__name__} carries {own!r} (those "
                              "its numbers hold in); omit units= (the header then says the value's own), or convert "
                              "the data and refit in the units meant")
-        u = {"u": said[0] or own[0], "y": said[1] or own[1]}
+        u = _units_arg(_filled(said, own))
     if u is not None:
         doc["units"] = u
     doc["object"] = _encode_fields(obj)
@@ -1447,7 +1470,7 @@ def save(
     obj: Any,
     path: str | os.PathLike,
     *,
-    units: tuple[str, str] | Mapping[str, str] | None = None,
+    units: tuple | Mapping[str, Any] | None = None,
 ) -> Path:
     """Write a graybox value to a JSON file (atomically: a crash never leaves a torn file).
 
@@ -1457,7 +1480,7 @@ def save(
         The value.
     path : str or PathLike
         Where to write (conventionally ``*.json``).
-    units : (str, str) or mapping, optional
+    units : tuple or mapping, optional
         Units of u and y for the header, as :func:`to_json` takes them (e.g. ``data.ident.units``).
 
     Returns
