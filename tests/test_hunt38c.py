@@ -264,5 +264,5 @@ def test_a_long_series_of_samples_is_read_in_linear_time():
     n = 100_000
     u = pd.Series(np.random.default_rng(0).standard_normal(n), name="speed")
     rec = gb.Record(u, np.random.default_rng(1).standard_normal(n), Ts=0.1)
-    assert rec.input_names == ("u",)
+    assert rec.input_names == ("speed",)  # the Series' name names the input, as a DataFrame's column does
     np.testing.assert_array_equal(np.ravel(rec.u), u.to_numpy())

@@ -496,3 +496,19 @@ def test_a_data_frames_column_names_are_its_inputs_names_as_a_dicts_keys_are():
     # a time column is still no input for its name
     with pytest.raises(ValueError, match="column 't' .* looks like time"):
         gb.Record(df.assign(t=np.arange(40) * 0.5), y)
+    # a column taken as a Series, df["flow"], is named by its name as df[["flow"]] is (it had the input u, and a
+    # structure in flow(k-1) was refused on it); an unnamed Series, or one named by a number, has the default name
+    assert gb.Record(df["flow"], y).input_names == ("flow",)
+    assert gb.Record(df["flow"], y, input_names=["q"]).input_names == ("q",)
+    assert gb.Record(pd.Series(df["flow"].to_numpy()), y).input_names == ("u",)
+    assert gb.Record(pd.DataFrame(df.to_numpy())[0], y).input_names == ("u",)
+    with pytest.raises(ValueError, match=r"the DataFrame's column names.*'flow rate' is not a valid"):
+        gb.Record(df.rename(columns={"flow": "flow rate"})["flow rate"], y)
+    with pytest.raises(ValueError, match="the output"):
+        gb.Record(df["flow"], df["flow"])
+    # and static points' levels so taken alike, so that a Dataset of both holds one input
+    pts = pd.DataFrame({"flow": [0.2, 0.5, 0.8, 0.8], "h": [1.0, 2.0, 3.0, 3.2]})
+    assert gb.StaticPoints(pts["flow"][:3], pts["h"][:3]).input_names == ("flow",)
+    assert gb.StaticPoints.from_repeats(pts["flow"], pts["h"]).input_names == ("flow",)
+    assert gb.Dataset(gb.Record(df["flow"], y), gb.Record(df["flow"], y),
+                      gb.StaticPoints(pts["flow"][:3], pts["h"][:3])).input_names == ("flow",)

@@ -85,11 +85,16 @@ def points_by_name(x: object, names: Sequence[str] | None, name: str) -> tuple[o
     return frame, (keys if names is None else names)
 
 
-def frame_names(x: object, names: Sequence[str] | None) -> Sequence[str] | None:
+def frame_names(x: object, names: Sequence[str] | None, *, column: bool = False) -> Sequence[str] | None:
     """The inputs' names of samples or levels ``x``: ``names`` where given (a DataFrame then read by name where its
     columns are those names, by position where they name none); else a DataFrame's column labels where each is text
     (``flow``, ``inlet``), as a dict's keys are (:func:`points_by_name`), not pandas' default 0, 1, … nor other
-    numbers; None (the default names ``u`` / ``u1 … um``) for anything else."""
+    numbers; ``column``: a Series whose index labels are no text (a column, not a row) is samples or levels of one
+    input, whose text name (``df["flow"]``) then names it as ``df[["flow"]]``'s column does; None (the default names
+    ``u`` / ``u1 … um``) for anything else."""
+    if (names is None and column and _is_series(x) and isinstance(getattr(x, "name", None), str)
+            and getattr(x.index, "inferred_type", "") != "string"):  # type: ignore[attr-defined]
+        return (x.name,)  # type: ignore[attr-defined]  (labels of text: a row, one point by its labels)
     if names is not None or not is_frame(x):
         return names
     labels = list(x.columns)  # type: ignore[attr-defined]
@@ -375,7 +380,8 @@ class Record(Relocked):
 
     def __post_init__(self) -> None:
         check_str(self.name, "Record: name")  # a label every message and file carries
-        given = frame_names(self.u, self.input_names)  # a frame's columns name its inputs, as a dict's keys do
+        # a frame's columns (a Series' name) name its inputs, as a dict's keys do
+        given = frame_names(self.u, self.input_names, column=True)
         own = given is not self.input_names
         u = as_input_array(self.u, f"{self.name}: u", given, output=self.y, own=own)
         y = as_1d_finite(self.y, f"{self.name}: y")
@@ -491,7 +497,7 @@ class StaticPoints(Relocked):
     def __post_init__(self) -> None:
         check_str(self.name, "StaticPoints: name")
         ubar, given = points_by_name(self.ubar, self.input_names, f"{self.name}: ubar")
-        named = frame_names(ubar, given)  # a frame's columns name its inputs, as a dict's keys do
+        named = frame_names(ubar, given, column=True)  # a frame's columns name its inputs, as a dict's keys do
         own, given = named is not given, named
         u = as_input_array(ubar, f"{self.name}: ubar", given, output=output_series(self.ybar), row="point")
         y = as_1d_finite(self.ybar, f"{self.name}: ybar")
@@ -571,7 +577,7 @@ class StaticPoints(Relocked):
         """
         check_str(name, "StaticPoints: name")
         ubar, input_names = points_by_name(ubar, input_names, f"{name}: ubar")
-        input_names = frame_names(ubar, input_names)  # a frame's columns name its inputs, as a dict's keys do
+        input_names = frame_names(ubar, input_names, column=True)  # a frame's columns name its inputs, as keys do
         u = as_input_array(ubar, f"{name}: ubar", input_names, output=output_series(ybar), row="point")
         y = as_1d_finite(ybar, f"{name}: ybar")
         if u.shape[0] != y.shape[0]:
