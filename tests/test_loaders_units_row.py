@@ -67,6 +67,21 @@ def test_the_units_row_is_checked(tmp_path):
         gb.load_record_csv(head, "speed", "p", time="t", units_row=True)
 
 
+def test_a_units_row_that_leaves_an_input_blank_says_nothing_of_it(tmp_path):
+    # a row naming 'l/min' for q and nothing for T gave both inputs 'l/min' (the record then clashed with one whose
+    # T is in °C), and units= naming q's unit beside a row naming T's only was refused as contradicting it
+    q_only = _write(tmp_path / "q.csv", "t,q,T,h\ns,l/min,,m\n0,1.0,20.0,1\n1,1.5,21.0,2\n2,2.0,22.0,3\n")
+    rec = gb.load_record_csv(q_only, ["q", "T"], "h", time="t", units_row=True)
+    assert rec.units == (("l/min", ""), "m")
+    full = _write(tmp_path / "full.csv", "t,q,T,h\ns,l/min,°C,m\n0,1.0,20.0,1\n1,1.5,21.0,2\n2,2.0,22.0,3\n")
+    gb.Dataset(rec, gb.load_record_csv(full, ["q", "T"], "h", time="t", units_row=True))
+    t_only = _write(tmp_path / "T.csv", "t,q,T,h\ns,,°C,m\n0,1.0,20.0,1\n1,1.5,21.0,2\n2,2.0,22.0,3\n")
+    assert gb.load_record_csv(t_only, ["q", "T"], "h", time="t", units_row=True,
+                              units=(("l/min", ""), "")).units == (("l/min", "°C"), "m")
+    pts = _write(tmp_path / "pts.csv", "q,T,h\nl/min,,m\n1.0,20.0,1\n2.0,21.0,2\n")
+    assert gb.load_static_csv(pts, ["q", "T"], "h", units_row=True).units == (("l/min", ""), "m")
+
+
 def test_a_grid_spec_takes_units_row(tmp_path):
     from graybox.experiments import Grid, SpecError
 

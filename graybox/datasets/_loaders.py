@@ -479,10 +479,9 @@ def _units_from_row(p: Path, units: tuple, row: dict[str, str], inputs: Sequence
                     time: str | None) -> tuple:
     """The (input, output) units a units row gives (the inputs' one unit, or one per input where they differ),
     checked against ``units`` given too (a time column's unit is read by :func:`_time_in_seconds`)."""
-    each = tuple(row[r] for r in inputs)
-    said = {x for x in each if x}
-    # one unit for the inputs (those the row leaves blank say nothing), else one per input, in the inputs' order
-    found = check_units(((said.pop() if len(said) == 1 else "") if len(said) <= 1 else each, row["y"]), f"{p}")
+    # one per input, in the inputs' order (one str where all are one); a blank says nothing of its input, not that
+    # it is in the others' unit
+    found = check_units((tuple(row[r] for r in inputs), row["y"]), f"{p}")
     for k in range(len(inputs)):
         given, read = input_unit(units, k), input_unit(found, k)
         if given and read and given != read:
@@ -491,7 +490,9 @@ def _units_from_row(p: Path, units: tuple, row: dict[str, str], inputs: Sequence
     if units[1] and found[1] and units[1] != found[1]:
         raise ValueError(f"{p}: units={units!r} says the output is in {units[1]!r}, but the units row says "
                          f"{found[1]!r}")
-    return (units[0] or found[0], units[1] or found[1])
+    # input by input: units= where it names one, the row elsewhere
+    each = [input_unit(units, k) or input_unit(found, k) for k in range(len(inputs))]
+    return check_units((each, units[1] or found[1]), f"{p}", len(inputs))
 
 
 def _skip_lines(raw: bytes, start: int, n: int) -> int:
