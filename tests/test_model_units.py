@@ -260,3 +260,13 @@ def test_units_given_to_save_per_input_are_checked_against_the_values_inputs_and
     doc["units"]["u"] = ["l/min", "°C", "bar"]
     with pytest.raises(gb.GrayboxFileError, match="header"):
         gb.from_json(json.dumps(doc))
+
+
+def test_a_dask_record_of_one_input_takes_one_input_unit():
+    # a DaskRecord holds one input, yet units=(('l/min', '°C'), 'm') was kept: two input units for one input, which a
+    # model fitted on it then carried
+    da = pytest.importorskip("dask.array")
+    u, y = da.from_array(np.arange(40.0), chunks=20), da.from_array(np.arange(40.0), chunks=20)
+    with pytest.raises(ValueError, match=r"2 input units .* for 1 input"):
+        gb.DaskRecord(u, y, units=(("l/min", "°C"), "m"))
+    assert gb.DaskRecord(u, y, units=(("l/min",), "m")).units == ("l/min", "m")

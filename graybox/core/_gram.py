@@ -100,7 +100,7 @@ class DaskRecord:
 
     def __post_init__(self) -> None:
         check_str(self.name, "DaskRecord: name")
-        object.__setattr__(self, "units", check_units(self.units, "DaskRecord"))
+        object.__setattr__(self, "units", check_units(self.units, "DaskRecord", 1))  # one input
         try:
             import dask.array as da
         except ImportError as exc:  # pragma: no cover - dask is optional
