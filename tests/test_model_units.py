@@ -270,3 +270,20 @@ def test_a_dask_record_of_one_input_takes_one_input_unit():
     with pytest.raises(ValueError, match=r"2 input units .* for 1 input"):
         gb.DaskRecord(u, y, units=(("l/min", "°C"), "m"))
     assert gb.DaskRecord(u, y, units=(("l/min",), "m")).units == ("l/min", "m")
+
+
+def test_a_pareto_set_or_selection_takes_one_unit_per_input_it_has():
+    # units listing 3 input units for 2 inputs were kept (a hand-edited file, a dataclasses.replace) and failed only
+    # later, when a member's model was made
+    from dataclasses import replace
+
+    each = (("l/min", "°C"), "m")
+    rec = _two_inputs(each)
+    pts = gb.StaticPoints(np.array([[2.0, 30], [5, 40], [8, 50]]), np.array([1.6, 2.25, 3.0]), input_names=("q", "T"),
+                          units=each)
+    ps = gb.pe_pareto(gb.Structure(["y(k-1)", "q(k-1)", "T(k-1)"]), rec, pts, lambdas=[0.5])
+    sel = gb.frols(gb.Candidates(1, 1, degree=1, input_names=("q", "T")), rec, n_terms=2)
+    assert ps.units == sel.units == each
+    for value in (ps, sel):
+        with pytest.raises(ValueError, match=r"3 input units .* for 2 input"):
+            replace(value, units=(("l/min", "°C", "bar"), "m"))

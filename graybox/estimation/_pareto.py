@@ -139,9 +139,10 @@ class ParetoSet(Relocked):
         The sampling period (s) of the records the set was fitted on (:meth:`from_thetas` takes the
         records'); its members' models carry it, and choosing records at another period are
         refused. None: unknown.
-    units : (str, str), optional
-        The units of the input(s) and the output of those records (:meth:`from_thetas` takes the records');
-        its members' models carry them, and choosing records in other units are refused. Empty: unknown.
+    units : tuple, optional
+        The units of the input(s) and the output of those records (the input's one str, or one per input;
+        :meth:`from_thetas` takes the records'); its members' models carry them, and choosing records in other
+        units are refused. Empty: unknown.
     fitted_on : tuple of Record or RecordPrint, optional
         The records the set was fitted on (:meth:`from_thetas` and the estimators keep them), or, for a set read
         from a file, their prints (names, lengths and hashes of blocks of samples, which :mod:`graybox.io` saves in
@@ -161,7 +162,7 @@ class ParetoSet(Relocked):
     failures: Mapping[int, str] = field(default_factory=dict)
     input_names: tuple[str, ...] | None = None
     Ts: float | None = None
-    units: tuple[str, str] = ("", "")
+    units: tuple[str | tuple[str, ...], str] = ("", "")
     fitted_on: tuple[Record | RecordPrint, ...] = ()
 
     def __post_init__(self) -> None:
@@ -172,10 +173,10 @@ class ParetoSet(Relocked):
                             f"a {type(bad[0]).__name__}")
         if self.Ts is not None:
             object.__setattr__(self, "Ts", check_real(self.Ts, "Ts (seconds)", low=0, low_open=True))
-        object.__setattr__(self, "units", check_units(self.units, "ParetoSet"))
         # checked and defaulted as a Model's (the members' models carry them)
         names = model_input_names(self.structure, self.input_names)
         object.__setattr__(self, "input_names", names)
+        object.__setattr__(self, "units", check_units(self.units, "ParetoSet", len(names)))
         th = frozen(self.thetas)
         if th.shape == (0, 0):  # no member (a JSON file gives back [] for none)
             th = frozen(np.zeros((0, len(self.structure))))

@@ -265,7 +265,7 @@ class Selection(Relocked):
     subset_rss: np.ndarray = field(default=())
     input_names: tuple[str, ...] | None = None
     Ts: float | None = None
-    units: tuple[str, str] = ("", "")
+    units: tuple[str | tuple[str, ...], str] = ("", "")
 
     def __post_init__(self) -> None:
         check_fields(self)
@@ -274,7 +274,7 @@ class Selection(Relocked):
         object.__setattr__(self, "input_names", names)
         if self.Ts is not None:
             object.__setattr__(self, "Ts", check_real(self.Ts, "Ts (seconds)", low=0, low_open=True))
-        object.__setattr__(self, "units", check_units(self.units, "Selection"))
+        object.__setattr__(self, "units", check_units(self.units, "Selection", len(names)))
         n, k = len(self.structure), len(self.evaluated)
         if tuple(self.evaluated)[:n] != tuple(self.structure):
             raise ValueError(f"the selected terms {self.structure} must be the first {n} evaluated terms, "
