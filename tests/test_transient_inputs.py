@@ -272,3 +272,23 @@ def test_several_records_are_told_to_be_given_one_at_a_time():
         gb.transient_inputs([rec, rec], taus=[2.0])
     each = [gb.transient_inputs(r, taus=[2.0]) for r in (rec, rec)]
     assert all(r.input_names == ("u", "u_tau2") for r in each)
+
+
+def test_inputs_in_units_of_their_own_get_transient_inputs_in_their_squares():
+    # a record, points or data set whose inputs have units of their own (l/min, °C) raised 'units give 2 input units
+    # for 4 input(s)': the new channels had no unit; each is now its input's unit squared, as documented
+    each = (("l/min", "°C"), "m")
+    rng = np.random.default_rng(0)
+    u = np.column_stack([np.repeat(rng.uniform(0, 10, 20), 10), np.repeat(rng.uniform(20, 60, 20), 10)])
+    rec = gb.Record(u, rng.standard_normal(200), Ts=2.0, units=each, input_names=("q", "T"))
+    pts = gb.StaticPoints(np.array([[2.0, 30], [5, 40], [8, 50]]), np.array([1.0, 2, 3]), input_names=("q", "T"),
+                          units=(("", "°C"), "m"))
+    ext = gb.transient_inputs(rec, [5.0])
+    assert ext.input_names == ("q", "T", "q_tau5", "T_tau5")
+    assert ext.units == (("l/min", "°C", "(l/min)²", "°C²"), "m")
+    assert gb.transient_inputs(pts, [5.0]).units == (("", "°C", "", "°C²"), "m")
+    data = gb.transient_inputs(gb.Dataset(rec, rec.slice(100, 200), pts), [5.0])
+    assert data.units == (("l/min", "°C", "(l/min)²", "°C²"), "m")
+    # one unit for every input is kept as it was (models saved with it hold their transient inputs in it)
+    assert gb.transient_inputs(gb.Record(u, rec.y, units=("rpm", "mlc"), input_names=("q", "T")), [5.0]).units == \
+        ("rpm", "mlc")

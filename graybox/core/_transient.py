@@ -25,7 +25,8 @@ from typing import Mapping, Sequence, TypeVar
 
 import numpy as np
 
-from ._records import Dataset, Record, StaticPoints
+from ._records import Dataset, Record, StaticPoints, check_units, input_unit
+from ._reprs import squared_unit
 from ._renamed import renamed_keyword
 from ._terms import transient_name, transient_source, transient_tau_text
 from ._validation import check_real, check_sequence
@@ -33,6 +34,17 @@ from ._validation import check_real, check_sequence
 __all__ = ["transient_inputs", "steady_levels", "recomputed_transients", "refuse_transient_levels"]
 
 _Data = TypeVar("_Data", Record, Dataset, StaticPoints)
+
+
+def _units(data: Record | StaticPoints, names: Sequence[str], new: list) -> tuple:
+    """The units of ``data`` extended by the transient inputs ``new`` ((name, input, τ) each): inputs in units of their
+    own give each new one its input's unit squared; one unit for every input stays so (a model saved with it holds
+    its transient inputs in that unit, and is compared with them by name)."""
+    if isinstance(data.units[0], str):
+        return data.units
+    each = [input_unit(data.units, j) for j in range(len(names))]
+    each += [squared_unit(input_unit(data.units, list(names).index(n))).strip() for _, n, _ in new]
+    return check_units((each, data.units[1]), data.name, len(each))
 
 
 def _filtered_square_change(u: np.ndarray, log_rho: float) -> np.ndarray:
@@ -129,11 +141,11 @@ def transient_inputs(data: _Data, taus: Sequence[float], *, input_names: Sequenc
 
     if isinstance(data, StaticPoints):
         ubar = np.column_stack([data.ubar.reshape(len(data.ybar), -1), np.zeros((len(data.ybar), len(new)))])
-        return StaticPoints(ubar, data.ybar, data.name, out_names, data.uncertainty, data.units)
+        return StaticPoints(ubar, data.ybar, data.name, out_names, data.uncertainty, _units(data, names, new))
     if isinstance(data, Record):
         cols = [data.inputs] + [_filtered_square_change(data.input(n), -data.Ts / t)[:, None]
                                 for _, n, t in new]
-        return Record(np.hstack(cols), data.y, data.Ts, data.name, data.units, out_names)
+        return Record(np.hstack(cols), data.y, data.Ts, data.name, _units(data, names, new), out_names)
     extra = dict(data.extra)
     before = extra.get("transient_inputs")
     extra["transient_inputs"] = {**(dict(before) if isinstance(before, Mapping) else {}),
