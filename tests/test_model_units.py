@@ -287,3 +287,14 @@ def test_a_pareto_set_or_selection_takes_one_unit_per_input_it_has():
     for value in (ps, sel):
         with pytest.raises(ValueError, match=r"3 input units .* for 2 input"):
             replace(value, units=(("l/min", "°C", "bar"), "m"))
+
+
+def test_a_network_reads_its_input_by_name_with_its_unit():
+    # a network of T alone runs on a record of (q, T), reading T by name, yet with the record's units (l/min, °C) it
+    # was refused by position: 'trained with input 1 unit '°C' but 'run 3' has 'l/min''
+    rec = _two_inputs((("l/min", "°C"), "m"), n=200)
+    one = gb.Record(rec.input("T"), rec.y, Ts=2.0, units=("°C", "m"), input_names=("T",))
+    net = gb.neural_narx(one, ny=1, nu=1, ne=0, hidden=2, epochs=1, sim_epochs=1).model
+    assert gb.js(net, rec) == gb.js(net, one)
+    with pytest.raises(ValueError, match=r"input 'T' unit '°C' but 'run 3' has 'K'"):
+        gb.js(net, _two_inputs((("l/min", "K"), "m"), n=200))

@@ -493,7 +493,7 @@ class NeuralModel(Relocked):
         """``ValueError`` when ``record`` (or static points) was sampled at another period than the network was
         trained at, or is in other units where both name them (as :meth:`graybox.Model.check_record`)."""
         check_fitted_on(self.Ts, self.units, f"network {self.name!r} was trained", record,
-                        "its weights hold in those units only; convert the data")
+                        "its weights hold in those units only; convert the data", self.input_names)
 
     def _input(self, record: Record) -> np.ndarray:
         """The record's input the network reads, by name, shape (N,) (ValueError naming both when it lacks it, or
