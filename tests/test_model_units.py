@@ -298,3 +298,17 @@ def test_a_network_reads_its_input_by_name_with_its_unit():
     assert gb.js(net, rec) == gb.js(net, one)
     with pytest.raises(ValueError, match=r"input 'T' unit '°C' but 'run 3' has 'K'"):
         gb.js(net, _two_inputs((("l/min", "K"), "m"), n=200))
+
+
+def test_static_points_beside_records_are_held_to_their_units_input_by_input():
+    # static= beside records with inputs in units of their own: an input the points leave unsaid says nothing, one
+    # they name otherwise is refused, named
+    rec = _two_inputs((("l/min", "°C"), "m"))
+    st = gb.Structure(["1", "y(k-1)", "q(k-1)", "T(k-1)"])
+    ubar = np.array([[2.0, 30.0], [5, 40], [8, 50]])
+    ybar = np.array([(0.1 * q + 0.02 * T) / 0.4 for q, T in ubar])
+    partial = gb.StaticPoints(ubar, ybar, input_names=("q", "T"), units=(("", "°C"), "m"))
+    model = gb.cls(st, rec, partial).model
+    np.testing.assert_allclose(model.static_curve({"q": [5.0], "T": [40.0]}), [(0.5 + 0.8) / 0.4], rtol=1e-6)
+    with pytest.raises(ValueError, match=r"input 'T' unit '°C' but .* has 'K'"):
+        gb.cls(st, rec, gb.StaticPoints(ubar, ybar, input_names=("q", "T"), units=(("l/min", "K"), "m")))

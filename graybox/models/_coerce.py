@@ -183,7 +183,7 @@ def static_info(static: object, data: object, *, needed_by: str | None = None, n
     if isinstance(static, StaticPoints):  # given beside the records (a Dataset's own points are checked by it)
         for r in _records_in(data):
             check_same_units(r.units, f"{r.name!r} has", static, "the records and the static points of one "
-                             "identification must be in the same units (convert one of them)")
+                             "identification must be in the same units (convert one of them)", r.input_names)
     out = static if static is not None else (data.static if isinstance(data, Dataset) else None)
     if out is None and needed_by is not None:
         raise ValueError(f"{needed_by} needs static points: pass {name}= or a Dataset with static points")

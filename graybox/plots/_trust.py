@@ -175,7 +175,8 @@ def plot_static_band(
     what = f"{percent_text(band.level)} band ({band.method})"
     name = band.model_name or "model"
     if points is not None:  # drawn over the band, points in other units would sit at the wrong ū and ȳ
-        check_same_units(band.units, "plot_static_band: the band is in", points, "convert the points")
+        check_same_units(band.units, "plot_static_band: the band is in", points, "convert the points",
+                         getattr(band, "input_names", None))
     # the band's units (its model's), the points' where the band names none
     k_in = i if surface else 0  # the input drawn against
     u_unit = input_unit(band.units, k_in) or ("" if points is None else input_unit(points.units, k_in))
