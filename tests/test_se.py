@@ -536,3 +536,24 @@ def test_multistart_evaluates_each_start_once(problem, monkeypatch):
     assert seen["r"].count(z0) == 1 and seen["T"].count(z0) == 1
     np.testing.assert_array_equal(after[0], before[0])
     assert after[1:] == before[1:]  # the same cost, and the same count of evaluations the solvers asked for
+
+
+@pytest.mark.parametrize("name, dtype", [("thetas", np.float32), ("costs", np.float32), ("thetas", np.longdouble)])
+def test_checkpoint_in_another_precision_is_refused(tmp_path, name, dtype):
+    # a checkpoint whose members another tool rewrote in float32 resumed them rounded (6.6e-9 off), silently
+    from graybox.estimation._simulation_error import CheckpointError, _load_checkpoint, _save_checkpoint
+
+    ck = tmp_path / "front.npz"
+    meta = {"problem": "p", "method": "gradient", "lambdas": [1.0, 0.5], "seed": None, "settings": {},
+            "graybox": "x"}
+    th = np.array([[0.1 + 1e-9, 0.2], [0.3, 0.4]])
+    _save_checkpoint(ck, meta, th, np.array([1.0, 2.0]), 2, {}, np.array([3, 4]))
+    assert _load_checkpoint(ck, meta, 2)["thetas"].tolist() == th.tolist()
+    with np.load(ck) as z:
+        arrays = dict(z)
+    if np.dtype(dtype).itemsize == np.dtype(float).itemsize and dtype is np.longdouble:
+        pytest.skip("long double is float64 on this platform")
+    arrays[name] = arrays[name].astype(dtype)
+    np.savez(ck, **arrays)
+    with pytest.raises(CheckpointError, match=f"{name} {np.dtype(dtype)} are not the float64 the sweep writes"):
+        _load_checkpoint(ck, meta, 2)

@@ -981,6 +981,13 @@ def _load_checkpoint(path: Path, meta: dict, n_terms: int | None = None, coords:
     if done.shape != () or done.dtype.kind not in "iu":
         raise corrupt(f"its count of members done is {done!r}, not an integer")
     done = out["done"] = int(done)
+    # the sweep writes float64: members rewritten in another precision (float32 by another tool) were rounded, and
+    # resumed they would join the front as other members than the ones fitted
+    narrow = [f"{k} {a.dtype}" for k, a in (("thetas", th), ("costs", costs), ("coords", arrays.get("coords")))
+              if a is not None and a.dtype.kind == "f" and a.dtype != np.float64 and (k != "coords" or coords)]
+    if narrow:
+        raise corrupt(f"its {', '.join(narrow)} are not the float64 the sweep writes: its members were rewritten "
+                      "in another precision, and resumed they would not be the members fitted")
     if th.dtype.kind != "f" or th.ndim != 2 or th.shape != (K, n_terms) or costs.dtype.kind != "f" \
             or costs.shape != (K,) or nfev.dtype.kind not in "iu" or nfev.shape != (K,):
         raise corrupt(f"arrays of shapes thetas {th.shape}, costs {costs.shape}, nfev {nfev.shape} for "
