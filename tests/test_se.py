@@ -360,8 +360,10 @@ def test_sweep_keeps_failed_members_and_the_others(buck_structure, method):
     st, data = buck_structure
     kw = {"options": SMALL} if method == "ga" else {}
     with beyond("1.5, 1.75"):
-        ps = se_pareto(st, data, None, lambdas=[1.0, 0.5, 0.1], method=method, progress=False, **kw)
-    assert len(ps) == 3 and 0 not in ps.failures and set(ps.failures) == {1, 2}
+        ps = se_pareto(st, data, None, lambdas=[1.0, 0.5, 0.1, 0.5], method=method, progress=False, **kw)
+    assert len(ps) == 4 and 0 not in ps.failures and set(ps.failures) == {1, 2, 3}
+    assert ps.failures[3] == ps.failures[1]  # λ1 = 0.5 given twice: one run, its failure twice
+    ps = ps.subset([0, 1, 2])
     assert np.isfinite(ps.JS[0]) and np.isfinite(ps.J1[0]) and np.all(np.isfinite(ps.thetas[0]))
     assert np.all(np.isnan(ps.thetas[1:])) and np.all(ps.JS[1:] == np.inf) and np.all(ps.JSF[1:] == np.inf)
     assert "λ1 = 0.5" in ps.failures[1] and ("equilibrium" in ps.failures[1])
@@ -557,3 +559,12 @@ def test_checkpoint_in_another_precision_is_refused(tmp_path, name, dtype):
     np.savez(ck, **arrays)
     with pytest.raises(CheckpointError, match=f"{name} {np.dtype(dtype)} are not the float64 the sweep writes"):
         _load_checkpoint(ck, meta, 2)
+
+
+def test_ga_lambda_given_twice_is_one_member_twice(problem):
+    # each λ1 was its own GA run: [0.3, 1.0, 0.3] gave two members at 0.3 of costs 0.031 and 0.015
+    ps = se_pareto(problem.structure, problem.record, problem.static, lambdas=[0.3, 1.0, 0.3], method="ga",
+                   theta0=None, margin=None, options=GAOptions(population=16, generations=6), progress=False)
+    assert ps.lambdas.tolist() == [0.3, 1.0, 0.3]
+    np.testing.assert_array_equal(ps.thetas[2], ps.thetas[0])
+    assert ps.extra["cost"][2] == ps.extra["cost"][0] and ps.JS[2] == ps.JS[0]

@@ -1853,7 +1853,8 @@ def se_pareto(
         :class:`StaticRangeWarning` names them once).
     lambdas : sequence of float in (0, 1], optional
         λ1 values; default: the paper's logspace(-2, 0, 100). The runs go from λ1 = 1 down whatever
-        the order given; the set's members are in the order given (as :func:`pe_pareto`'s).
+        the order given; the set's members are in the order given (as :func:`pe_pareto`'s). Each distinct λ1 is
+        fitted once: a value given twice gives two copies of its member (both methods).
     method : {"ga", "gradient"}
         The paper's genetic algorithm, or ``scipy.optimize.least_squares`` with the analytic
         Jacobian of the free run.
@@ -1968,7 +1969,10 @@ def se_pareto(
     problem = SEProblem(st, fit_rec, fit_sp, margin=None if margin == "auto" else margin, ridge=ridge)
     problem.check_identified()  # the records with the static points (an input held constant needs them)
     warn_static_range(sp.ubar, rec)  # after: bad input is an error, not a warning and an error
-    lam_in = SE_LAMBDAS if lambdas is None else lambdas
+    lam_user = check_lambdas(SE_LAMBDAS if lambdas is None else lambdas)
+    # one run per distinct λ1, from 1 down; a λ1 given twice is that member's copy (the GA's second run of it was
+    # another member, the gradient method's the same one)
+    lam_in = np.unique(lam_user)[::-1]
 
     def sweep(problem: SEProblem, checkpoint, lams=lam_in, progress=progress, fitted=None) -> SEFront:
         if method == "ga":
@@ -2021,9 +2025,9 @@ def se_pareto(
                                   prefix="se_pareto: a member cannot be used on these data: ")
         costs = unscaled_rss(costs, exps)  # output units²: inf or 0 beyond the range, as y² there
     # the sweep runs from λ1 = 1 down (an internal matter); the set keeps the caller's order of lambdas, as
-    # pe_pareto's does: sweep position p holds the caller's member order[p]
-    order = np.argsort(-check_lambdas(lam_in), kind="stable")
-    back = np.argsort(order)
+    # pe_pareto's does: the caller's member k is sweep position back[k]
+    back = np.searchsorted(-front.lambdas, -lam_user)
     return ParetoSet.from_thetas(problem.structure, thetas[back], front.lambdas[back], rec, sp, method=f"SE ({method})",
                                  extra={"cost": costs[back], "radius": radii[back], "margin": margins[back]},
-                                 threads=threads, failures={int(order[p]): why for p, why in failures.items()})
+                                 threads=threads, failures={k: failures[int(p)] for k, p in enumerate(back)
+                                                            if int(p) in failures})
