@@ -377,8 +377,32 @@ def test_sweep_keeps_failed_members_and_the_others(buck_structure, method):
 def test_every_member_failed_is_an_error_listing_the_reasons(buck_structure):
     st, data = buck_structure
     with pytest.raises(ValueError, match=r"every member of the SE sweep \(gradient\) failed.*λ1 = 0\.5: no start.*"
-                                         r"λ1 = 0\.2: no start.*ū = 1\.5"), beyond("1.5, 1.75"):
+                                         r"λ1 = 0\.2: no start.*ū = 1\.5") as err, beyond("1.5, 1.75"):
         se_pareto(st, data, None, lambdas=[0.5, 0.2], method="gradient", progress=False)
+    # the gradient method has no generations (it was offered them); a margin (never offered) fits both members
+    assert str(err.value).endswith("Try another structure, theta0 or starts; where free runs diverge or equilibria "
+                                   "are unstable, a stability margin (margin=0.05, say) pulls the starts inside it by "
+                                   "shrinking their output feedback")
+
+
+def test_every_member_failed_advice_fits_the_method(buck_structure, problem, monkeypatch):
+    import graybox.estimation._simulation_error as se
+
+    st, data = buck_structure
+    with pytest.raises(ValueError, match=r"failed.*Try another structure, theta0 or starts, or more generations or "
+                                         r"a larger population \(options=GAOptions"), beyond("1.5, 1.75"):
+        se_pareto(st, data, None, lambdas=[0.5, 0.2], method="ga", options=SMALL, progress=False)
+    # every start diverging: was offered "more generations", never a margin (margin=0.05 then fits both members)
+    bad = problem.ls_theta().copy()
+    bad[0] = 5.0
+    monkeypatch.setattr(se, "_pe_members", lambda prob, lam: np.vstack([bad] * len(lam)))
+    for margin in (None, "auto"):
+        with pytest.raises(ValueError, match=r"free run diverges.*Try another structure, theta0 or starts; where "
+                                             r"free runs diverge or equilibria are unstable, a stability margin"):
+            se_pareto(problem.structure, problem.record, problem.static, lambdas=[0.5, 0.2], method="gradient",
+                      theta0=bad, starts=[bad], margin=margin, progress=False)
+    # with a margin set already it is not offered again
+    assert se._all_failed_advice("gradient", ["free run diverges"], 0.05) == "Try another structure, theta0 or starts"
 
 
 def test_failed_member_is_retried_from_later_members(problem, monkeypatch):

@@ -50,7 +50,7 @@ import warnings
 import zipfile
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
-from typing import Any, Callable, Literal, Mapping, Sequence, TypeVar
+from typing import Any, Callable, Iterable, Literal, Mapping, Sequence, TypeVar
 
 import numpy as np
 from scipy.linalg.lapack import dgeqrf
@@ -1746,6 +1746,22 @@ def _pe_starts(problem: SEProblem) -> list[np.ndarray]:
     return [] if th is None else [t for t in th if np.all(np.isfinite(t))]
 
 
+def _all_failed_advice(method: str, reasons: Iterable[str], margin: float | None) -> str:
+    """What to try when every member of a sweep failed, for this method: more generations help a GA run find
+    a finite cost, not a gradient fit that has no feasible start; where free runs diverged or equilibria were
+    unstable (the texts of :func:`_why_infeasible` and :func:`_population_faults`) and no margin was set, one pulls
+    the starts inside (:func:`_pull_inside`)."""
+    tries = "another structure, theta0 or starts" + (
+        ", or more generations or a larger population (options=GAOptions(generations=..., population=...))"
+        if method == "ga" else "")
+    unstable = ("free run diverges", "diverged (free run)", "equilibrium unstable", "an unstable or undefined equil")
+    if margin is None and any(t in r for r in reasons for t in unstable):
+        # the buck converter's degree-3 structure, every member failing so, fits with margin=0.05 by both methods
+        tries += ("; where free runs diverge or equilibria are unstable, a stability margin (margin=0.05, say) "
+                  "pulls the starts inside it by shrinking their output feedback")
+    return f"Try {tries}"
+
+
 #: Options of :func:`se_pareto` that apply to one method only.
 _METHOD_ONLY = {"ga": ("options",), "gradient": ("max_nfev", "tol", "solver")}
 
@@ -2016,7 +2032,7 @@ def se_pareto(
     if len(failures) == K:
         reasons = "; ".join(f"λ1 = {front.lambdas[i]:g}: {why}" for i, why in sorted(failures.items()))
         raise ValueError(f"every member of the SE sweep ({method}) failed, so there is no Pareto set: {reasons}. "
-                         "Try another structure, theta0, starts or more generations")
+                         + _all_failed_advice(method, failures.values(), problem.margin))
     radii = problem.warn_slow(thetas, f"SE sweep ({method}) members", auto=margin == "auto")
     if exps:  # in the data's own units: a member's θ that is no float there is refused by name
         fitted = np.array([i not in failures for i in range(K)], dtype=bool)
