@@ -435,6 +435,7 @@ def unscaled_levels(levels: Mapping[str, float], exps: Mapping[str, int]) -> dic
 
 
 def unscaled_rss(rss: np.ndarray, exps: Mapping[str, int]) -> np.ndarray:
-    """The data's own RSS (output units²: inf or 0 where it leaves the floating-point range, as y² there)."""
+    """The data's own RSS (output units²): the nearest float to it, as y² there (one rounding, exact otherwise): a
+    subnormal of fewer digits below 2.2e-308, 0 only below 2.5e-324, inf above 1.8e308."""
     with np.errstate(over="ignore", under="ignore"):
         return np.ldexp(rss, 2 * exps.get("y", 0))

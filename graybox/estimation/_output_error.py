@@ -73,8 +73,10 @@ class OEResult(Relocked):
     model : Model
         The estimate (engineering units).
     JS : float
-        Its free-run MSE on the fitting record(s) (output units²; 0 or inf where that leaves the float range, an
-        output near 1e-160 or 1e160: the fit itself runs on the signals times a power of two).
+        Its free-run MSE on the fitting record(s) (output units²). Near the float range's ends (an output near
+        1e-160 or 1e160; the fit itself runs on the signals times a power of two) it is the nearest float to the
+        data's value, as y² there: a subnormal of fewer digits below 2.2e-308 (about 3e-323 at y × 1e-160, never
+        rounded to a 0 that would read as an exact fit), 0 only below 2.5e-324, inf above 1.8e308.
     JS_choose : float
         Its free-run MSE on the choosing record(s); NaN when none was given.
     chosen_on : str
