@@ -369,6 +369,28 @@ def test_the_permutation_limit_is_seeded():
         gb.residual_tests(m, rec, seed=1.5)
 
 
+def test_the_result_keeps_its_seed_and_older_files_load_with_it_unknown(tmp_path):
+    # the seed that set the limits was not kept: neither the result nor its file said which limits they were
+    rec = simulate(4, N=300)
+    m = ls(GOOD, rec)
+    c = gb.residual_tests(m, rec, seed=7)
+    assert c.seed == 7 and "simultaneous 95%, seed 7;" in repr(c)
+    assert all(c[k].limit == gb.residual_tests(m, rec, seed=c.seed)[k].limit for k in c.tests)  # its limits again
+    pw = gb.residual_tests(m, rec, rule="pointwise", seed=7)
+    assert pw.seed is None and "seed" not in repr(pw)  # nothing drawn
+    gb.io.save(c, tmp_path / "t.json")
+    assert gb.io.load(tmp_path / "t.json").seed == 7
+    doc = json.loads((tmp_path / "t.json").read_text(encoding="utf-8"))
+    del doc["object"]["seed"]  # as an older graybox wrote it
+    (tmp_path / "old.json").write_text(json.dumps(doc), encoding="utf-8")
+    old = gb.io.load(tmp_path / "old.json")
+    assert old.seed is None and "seed unknown" in repr(old)
+    with pytest.raises(ValueError, match="nothing was drawn"):
+        dataclasses.replace(pw, seed=7)
+    with pytest.raises(ValueError, match="seed"):
+        dataclasses.replace(c, seed=-1)
+
+
 def test_the_excess_kurtosis_of_a_correlation_with_gaussian_noise_is_the_spheres():
     # with b Gaussian, b / ‖b‖ is uniform on the sphere and φ = a·b / (‖a‖‖b‖) is exactly 2 Beta(m, m) − 1, m = (N −
     # 1)/2, whatever a: N times its excess kurtosis is −6 N / (N + 2) (Beta's −6 / (2m + 3)); the field said 0 there

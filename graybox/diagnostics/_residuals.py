@@ -271,6 +271,10 @@ class ResidualTests(Relocked):
         two u² tests), residuals of one magnitude ±c (ξ² constant: φ_(u²)'ξ²), or residuals c·u'
         of such an input (ξu' constant: its φ_ξ(ξu)). They are not in ``tests`` and take no part
         in :attr:`passed`.
+    seed : int or None
+        The seed of the permutations that set the simultaneous limits (``residual_tests(seed=)``): with the
+        same data, level and seed they are the same limits. None where nothing was drawn (the pointwise rule, a
+        file of the Bonferroni limits) or where it is unknown (a file of a graybox that did not keep it).
     """
 
     tests: Mapping[str, CorrelationTest]
@@ -280,12 +284,18 @@ class ResidualTests(Relocked):
     model_name: str
     residuals: tuple[np.ndarray, ...]
     undefined: Mapping[str, str] = field(default_factory=FrozenMap)
+    seed: int | None = None
 
     def __post_init__(self) -> None:
         check_fields(self)
         check_int(self.n, "n", low=1)
         check_level(self.level)
         check_choice(self.rule, "rule", RULES)
+        if self.seed is not None:
+            check_seed(self.seed, "seed")
+            if not any(getattr(t, "permutations", 0) for t in self.tests.values()):
+                raise ValueError(f"seed = {self.seed!r} of tests whose limits no permutation set (the pointwise "
+                                 "rule's band, or Bonferroni limits): nothing was drawn, the seed is None")
         for k, t in self.tests.items():
             if not isinstance(t, CorrelationTest) or t.name != k or k.split(":")[0] not in TESTS:
                 raise ValueError(f"tests[{k!r}] must be the CorrelationTest named {k!r}, one of {list(TESTS)} "
@@ -380,7 +390,10 @@ class ResidualTests(Relocked):
         verdict = "all passed" if self.passed else f"failed: {', '.join(self.tests[k].label for k in self.failed)}"
         if self.undefined:
             verdict += f"; {len(self.undefined)} undefined on these data ({', '.join(self.undefined)})"
-        return f"ResidualTests({self.model_name or 'model'}: N = {self.n}, {self.rule} {percent_text(self.level)}; {verdict})"
+        drawn = any(t.permutations for t in self.tests.values())
+        seed = "" if not drawn else f", seed {self.seed}" if self.seed is not None else ", seed unknown"
+        return (f"ResidualTests({self.model_name or 'model'}: N = {self.n}, {self.rule} {percent_text(self.level)}"
+                f"{seed}; {verdict})")
 
 
 # --------------------------------------------------------------------------------------------
@@ -666,7 +679,7 @@ def residual_tests(
         out[k] = CorrelationTest(k, _label_of(k), kind, _ro(lags), _ro(phi), band, limit, _ro(outside),
                                  bool(np.all(np.abs(phi) <= limit)), kurt, skew, permutations)
     return ResidualTests(FrozenMap(out), n, level, rule, getattr(model, "name", ""),
-                         tuple(_ro(e) for e in xi), FrozenMap(undefined))
+                         tuple(_ro(e) for e in xi), FrozenMap(undefined), seed if permutations else None)
 
 #: Exceedances of the permutation limit at ``level``: (B + 1)(1 − level) permuted maxima lie at or above it, 10
 #: where the cap allows (B = 199 at 95 %, 999 at 99 %), at least 1 (an exact test needs one), B at most 9999.

@@ -754,7 +754,8 @@ _CODECS: dict[str, tuple[type | str, tuple[tuple[str, str], ...]]] = {
                                           ("excess_kurtosis", "float"), ("skewness", "float"),
                                           ("permutations", "int"))),
     "ResidualTests": (ResidualTests, (("tests", "correlation_tests"), ("n", "int"), ("level", "float"), ("rule", "str"),
-                                      ("model_name", "str"), ("residuals", "arrays"), ("undefined", "texts"))),
+                                      ("model_name", "str"), ("residuals", "arrays"), ("undefined", "texts"),
+                                      ("seed", "seed_or_none"))),
     "GAOptions": (GAOptions, (("population", "int"), ("generations", "int"), ("stall", "int_or_none"),
                               ("crossover_prob", "float"), ("crossover_ratio", "float"), ("mutation_prob", "float"),
                               ("mutation_scale", "float"), ("elite", "int"), ("random_samples", "int"),
@@ -883,7 +884,9 @@ _ADDED: dict[str, dict[str, Any]] = {"ELSResult": {"n_direct": 0}, "Decision": {
                                      # the sequences' tails, carried since hunt59d: normal ones (the Bonferroni
                                      # limit those files hold); the permutations the limit was set on, since
                                      # stats61f: none (the Bonferroni limit, or its Edgeworth tails)
-                                     "CorrelationTest": {"excess_kurtosis": 0.0, "skewness": 0.0, "permutations": 0}}
+                                     "CorrelationTest": {"excess_kurtosis": 0.0, "skewness": 0.0, "permutations": 0},
+                                     # the seed of those permutations, kept since mend61k: unknown
+                                     "ResidualTests": {"seed": None}}
 
 #: Fields that files written by an older graybox carry and this one no longer has: read and dropped.
 #: A GrayboxSelection named the SQLite store its cells ran in; it no longer runs through a store.
