@@ -347,3 +347,31 @@ def test_monte_carlo_static_bands_say_when_draws_reach_no_equilibrium():
         warnings.simplefilter("error", gb.UncertaintyWarning)
         band2 = gb.static_curve_band(gb.ls_uncertainty(m2, rec2), [0.5, 1.0], method="monte-carlo", n_samples=400)
     assert np.all(band2.undefined == 0)
+
+
+def _first_order(a):
+    """LS uncertainty of y(k) = a y(k-1) + u(k-1) + noise: gain 1/(1 − a)."""
+    rng = np.random.default_rng(0)
+    s = gb.Structure(["y(k-1)", "u(k-1)"])
+    u = rng.uniform(0, 1, 300)
+    rec = gb.Record(u, gb.simulate(s, np.array([a, 1.0]), u, np.zeros(1)) + 0.01 * rng.standard_normal(300))
+    return gb.ls_uncertainty(gb.els(s, rec, noise=0).model, rec)
+
+
+def test_static_curve_band_far_out_is_the_band_there_or_names_its_overflow():
+    # at ū = 1e200 the delta band's variance (1e396) and the draws' squares overflowed: "ybar_low must hold finite
+    # numbers (NaN only where no draw was kept)", of a band about 2e200 ± 1e198
+    q = _first_order(0.5)
+    (a, b), cov = q.theta, q.cov
+    g = np.array([b / (1 - a) ** 2, 1 / (1 - a)])  # ∂ȳ/∂(a, b) at ū = 1, by hand: ȳ = b ū / (1 − a)
+    band = gb.static_curve_band(q, [1e200])
+    assert band.ybar_std[0] == pytest.approx(1e200 * np.sqrt(g @ cov @ g), rel=1e-9)
+    near, far = (gb.static_curve_band(q, [x], method="monte-carlo", n_samples=200) for x in (1.0, 1e200))
+    assert far.ybar_std[0] == pytest.approx(1e200 * near.ybar_std[0], rel=1e-9)  # the same draws, ȳ linear in ū
+    # ȳ = 1.785e308 at ū = 1e308: the delta method's gradient leaves the float range; the draws' band does not
+    q = _first_order(0.44)
+    with pytest.raises(ValueError, match=r"the band overflows at ū = 1e\+308 \(ȳ = 1\.78.*e\+308\): the band of ȳ "
+                                         r"and the band of its gain leave the float range.*monte-carlo"):
+        gb.static_curve_band(q, [1.0, 1e308])
+    mc = gb.static_curve_band(q, [1e308], method="monte-carlo", n_samples=200)
+    assert np.isfinite(mc.ybar_low[0]) and mc.ybar_low[0] < mc.ybar[0] < mc.ybar_high[0]

@@ -76,7 +76,7 @@ from ..estimation._extended_least_squares import _ma_coefficients, _pure_lags, _
 from ..static._analysis import one_input_levels, reached_equilibria, static_theta_gradient
 from ..static._linearisation import static_gain_gradient, static_gains, static_powers, static_theta_gradient_of
 from ..static._surface_analysis import points_of_inputs, reached_surface, static_surface, surface_theta_gradient
-from ..core._reprs import share_text
+from ..core._reprs import point_texts, share_text
 from ..core._validation import (Relocked, check_count, check_band_finite, check_band_values, check_choice, check_fields,
                                 check_int, check_level, check_real, check_seed, frozen, warn)
 
@@ -252,6 +252,16 @@ class ParameterUncertainty(Relocked):
         if self.cov_factor is not None:
             return np.einsum("ij,ij->i", G @ self.cov_factor.T, G @ self.cov_factor.T)
         return np.clip(np.einsum("ij,jk,ik->i", G, self.cov, G), 0, None)
+
+    def std_of(self, G: np.ndarray) -> np.ndarray:
+        """The standard deviations √(gᵀ cov g) of the rows of ``G`` (shape (M, n_terms)), shape (M,): each row over
+        the power of two above its largest |entry| (exact), so that a deviation within the float range is one where
+        its variance is not (a static curve's at ū = 1e200, about 1e198, read inf through its variance 1e396)."""
+        G = np.atleast_2d(np.asarray(G, float))
+        e = binary_exponent(np.max(np.abs(G), axis=1, initial=0.0))
+        # a gradient beyond the float range (inf) gives NaN here, which the bands name (_refuse_overflow)
+        with np.errstate(over="ignore", invalid="ignore"):
+            return np.ldexp(np.sqrt(self.contract(np.ldexp(G, -e[:, None]))), e)
 
     @property
     def theta(self) -> np.ndarray:
@@ -1615,8 +1625,39 @@ def _draws_band(Y: np.ndarray, G: np.ndarray, level: float, y: np.ndarray, g: np
         ylo, yhi = np.nanquantile(Yn, [a, 1 - a], axis=0)
         glo, ghi = np.nanquantile(Gn, [a, 1 - a], axis=0)
         wy, wg = w.reshape((-1,) + (1,) * (Y.ndim - 1)), w.reshape((-1,) + (1,) * (G.ndim - 1))
-        return (undefined, ylo, yhi, np.nanstd(wy * (Yn - y), axis=0), glo, ghi,
-                np.nanstd(wg * (Gn - g), axis=0))
+        return (undefined, ylo, yhi, _scaled_nanstd(wy * (Yn - y)), glo, ghi, _scaled_nanstd(wg * (Gn - g)))
+
+
+def _scaled_nanstd(D: np.ndarray) -> np.ndarray:
+    """nanstd along the first axis, each column over the power of two above its largest |entry| (exact): draws
+    deviating by 1e198 (a static curve at ū = 1e200) have a spread of that size, which their squares read inf."""
+    with warnings.catch_warnings(), np.errstate(over="ignore"):
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns give NaN
+        e = binary_exponent(np.nanmax(np.abs(D), axis=0, initial=0.0))
+        return np.ldexp(np.nanstd(np.ldexp(D, -e), axis=0), e)
+
+
+def _refuse_overflow(ub: np.ndarray, yb: np.ndarray, hy: np.ndarray, gain: np.ndarray, hg: np.ndarray,
+                     drawn: bool) -> None:
+    """``ValueError`` naming the first level ``ub`` (M,) or point (M, m) where the band of ȳ (``yb`` ± ``hy``, its
+    half width or spread) or of a gain (``gain`` ± ``hg``) leaves the float range: said as that, not as a band whose
+    ends are not finite numbers. ``drawn`` (Monte Carlo): a NaN spread is no draw kept there, no overflow; the
+    delta method's NaN is a gradient beyond the float range (∞ − ∞ in its contraction)."""
+    M = len(yb)
+    with np.errstate(over="ignore", invalid="ignore"):
+        ends = {"ȳ": (np.column_stack([yb + hy, yb - hy]), hy.reshape(M, -1)),
+                "its gain": (np.column_stack([(gain + hg).reshape(M, -1), (gain - hg).reshape(M, -1)]),
+                             hg.reshape(M, -1))}
+    over = {k: (np.isinf(x) | (np.isnan(x) & ~(drawn & np.isnan(h)).all(axis=1, keepdims=True))).any(axis=1)
+            for k, (x, h) in ends.items()}
+    bad = over["ȳ"] | over["its gain"]
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        what = " and ".join(f"the band of {k}" for k in over if over[k][i])
+        how = "" if drawn else " (method='monte-carlo' draws it without the delta method's gradient)"
+        leave = "leave" if " and " in what else "leaves"
+        raise ValueError(f"the band overflows at ū = {point_texts(np.asarray(ub))[i]} (ȳ = {yb[i]:g}): {what} {leave} "
+                         f"the float range (±1.8e308){how}; give levels where the static map and its band are floats")
 
 
 def _own(y: np.ndarray, g: np.ndarray, y_est: np.ndarray, g_est: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -1757,7 +1798,8 @@ def static_curve_band(
         z = uncertainty.quantile  # Student's t, as the parameters' intervals: σ² is estimated
         Gy = static_theta_gradient_of(p, A, th, uc, yb)
         Gg = static_gain_gradient(p, A, th, uc, yb, Gy)[:, 0, :]
-        sy, sg = np.sqrt(uncertainty.contract(Gy)), np.sqrt(uncertainty.contract(Gg))
+        sy, sg = uncertainty.std_of(Gy), uncertainty.std_of(Gg)
+        _refuse_overflow(ub, yb, z * sy, gain, z * sg, drawn=False)
         return StaticCurveBand(ub, yb, yb - z * sy, yb + z * sy, sy, gain, gain - z * sg, gain + z * sg, sg,
                                uncertainty.level, "delta", 0, np.zeros(ub.size), m.name, m.units)
     rng = np.random.default_rng(seed)
@@ -1767,6 +1809,7 @@ def static_curve_band(
     G = static_gains(p, A, both, uc, Y)[..., 0]
     undefined, ylo, yhi, sy, glo, ghi, sg = _draws_band(Y[1:], G[1:], uncertainty.level, *_own(Y[0], G[0], yb, gain),
                                                         w)
+    _refuse_overflow(ub, yb, sy, gain, sg, drawn=True)
     warn_dropped_draws("static_curve_band", undefined)
     return StaticCurveBand(ub, yb, ylo, yhi, sy, gain, glo, ghi, sg, uncertainty.level, "monte-carlo", n_samples,
                            undefined, m.name, m.units)
@@ -1842,8 +1885,9 @@ def static_surface_band(
         z = uncertainty.quantile
         dy = static_theta_gradient_of(p, A, th, ub, yb)
         Gg = static_gain_gradient(p, A, th, ub, yb, dy)  # (M, m, n)
-        sy = np.sqrt(uncertainty.contract(dy))
-        sg = np.sqrt(uncertainty.contract(Gg.reshape(-1, th.size))).reshape(gain.shape)
+        sy = uncertainty.std_of(dy)
+        sg = uncertainty.std_of(Gg.reshape(-1, th.size)).reshape(gain.shape)
+        _refuse_overflow(ub, yb, z * sy, gain, z * sg, drawn=False)
         return StaticSurfaceBand(ub, names, yb, yb - z * sy, yb + z * sy, sy, gain, gain - z * sg, gain + z * sg, sg,
                                  uncertainty.level, "delta", 0, np.zeros(ub.shape[0]), m.name, m.units)
     rng = np.random.default_rng(seed)
@@ -1853,6 +1897,7 @@ def static_surface_band(
     Y = reached_surface(st, both, ub, yb, inputs=names).ybar  # (P + 1, M)
     G = static_gains(p, A, both, ub, Y)
     undefined, ylo, yhi, sy, glo, ghi, sg = _draws_band(Y[1:], G[1:], uncertainty.level, *_own(Y[0], G[0], yb, gain), w)
+    _refuse_overflow(ub, yb, sy, gain, sg, drawn=True)
     warn_dropped_draws("static_surface_band", undefined)
     return StaticSurfaceBand(ub, names, yb, ylo, yhi, sy, gain, glo, ghi, sg, uncertainty.level, "monte-carlo",
                              n_samples, undefined, m.name, m.units)
