@@ -573,3 +573,20 @@ def test_a_dict_level_of_more_than_one_dimension_is_refused_not_flattened():
     with pytest.raises(ValueError, match=r"\['a'\] must be one level or a 1-D sequence"):
         m.static_curve({"a": [[1.0, 2.0], [3.0, 4.0]], "b": [1.0, 2.0, 3.0, 4.0]})
     np.testing.assert_array_equal(m.static_curve({"a": [1.0, 2.0], "b": [3.0, 4.0]}), [14.0, 20.0])
+
+
+def test_dict_levels_as_series_of_other_indexes_are_refused_not_paired_by_position():
+    # {'a': Series([1, 2], index=[5, 6]), 'b': Series([3, 4], index=[6, 5])} made the points (1, 3), (2, 4), where
+    # pandas aligns (1, 4), (2, 3): Series of one index are read as given, of different indexes refused by name
+    import pandas as pd
+
+    a = pd.Series([1.0, 2.0], index=[5, 6])
+    same = StaticPoints({"a": a, "b": pd.Series([3.0, 4.0], index=[5, 6])}, [5.0, 6.0])
+    np.testing.assert_array_equal(same.ubar, [[1.0, 3.0], [2.0, 4.0]])
+    with pytest.raises(ValueError, match=r"ubar: the Series of 'a' and 'b' have different indexes \(\[5, 6\] and "
+                                         r"\[6, 5\]\); the levels are paired by position, not aligned by label"):
+        StaticPoints({"a": a, "b": pd.Series([3.0, 4.0], index=[6, 5])}, [5.0, 6.0])
+    m = Model(Structure(["y(k-1)", "a(k-1)", "b(k-1)"]), [0.5, 1.0, 2.0])
+    with pytest.raises(ValueError, match=r"different indexes"):
+        m.static_curve({"a": a, "b": pd.Series([3.0, 4.0], index=[0, 1])})
+    np.testing.assert_array_equal(m.static_curve({"a": a, "b": [3.0, 4.0]}), [14.0, 20.0])  # a sequence: by position

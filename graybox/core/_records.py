@@ -20,7 +20,8 @@ import numpy as np
 from ._reprs import listed, range_text
 from ._terms import check_input_names, default_input_names, missing_input_hint, transient_source
 from ._validation import (SAMPLES, Relocked, as_1d_finite, locked, check_int, check_ordered, check_per_point,
-                          check_real, check_str, float_array, frozen_value, refuse_flags, refuse_non_real, warn)
+                          check_real, check_str, float_array, frozen_value, refuse_flags, refuse_non_real, short_value,
+                          warn)
 
 __all__ = ["Record", "StaticPoints", "StaticRangeWarning", "warn_static_range"]
 
@@ -48,11 +49,23 @@ def labelled_point(x: object, names: Sequence[str]) -> bool:
 def _levels_by_name(x: Mapping[Any, Any], name: str) -> object:
     """Steady levels given as a dict by input name (``{"flow": 7.0, "inlet": 20.0}``, as ``GainBounds`` takes
     its bounds): the pandas Series (one number each: one point ū) or DataFrame (a sequence each) that
-    :func:`frame_inputs` reads by name."""
+    :func:`frame_inputs` reads by name. The levels are paired by position; pandas Series among them must share one
+    index (the same labels in the same order), else ``ValueError`` naming them: pandas would align them by label,
+    and reading them by position paired levels their indexes put on other rows."""
     import pandas as pd  # only for a dict: `import graybox` stays fast
 
     if not all(isinstance(k, str) for k in x):
         raise TypeError(f"{name}: a dict of input levels is keyed by the inputs' names (str), got keys {list(x)!r}")
+    series = {k: v for k, v in x.items() if _is_series(v)}
+    if series:
+        first, *rest = series
+        other = next((k for k in rest if not series[k].index.equals(series[first].index)), None)
+        if other is not None:
+            def shown(k):
+                return short_value(list(series[k].index))
+            raise ValueError(f"{name}: the Series of {first!r} and {other!r} have different indexes ({shown(first)} "
+                             f"and {shown(other)}); the levels are paired by position, not aligned by label: give them "
+                             f"one index ({other!r} reindexed by the index of {first!r}) or plain sequences")
     given = {k: np.asarray(v, dtype=object) for k, v in x.items()}
     for k, v in given.items():  # a matrix of levels would be flattened row by row into points no one gave
         if v.ndim > 1:
@@ -468,7 +481,9 @@ class StaticPoints(Relocked):
         where its columns are the ``input_names``, by position where they name none of them, and
         refused where they name some (as :class:`Record`'s ``u``). A dict keyed by input name
         (``{"flow": [1.0, 2.0], "inlet": [20.0, 25.0]}``, as static curves take levels) gives the
-        ``input_names`` by its keys; with ``input_names`` given, its keys must be those names.
+        ``input_names`` by its keys; with ``input_names`` given, its keys must be those names. Its
+        levels are paired by position: pandas Series among them must share one index (refused
+        otherwise, naming them; they are not aligned by label).
     ybar : array_like, shape (M,)
         Settled output at each level.
     name : str, optional
