@@ -512,3 +512,12 @@ def test_a_data_frames_column_names_are_its_inputs_names_as_a_dicts_keys_are():
     assert gb.StaticPoints.from_repeats(pts["flow"], pts["h"]).input_names == ("flow",)
     assert gb.Dataset(gb.Record(df["flow"], y), gb.Record(df["flow"], y),
                       gb.StaticPoints(pts["flow"][:3], pts["h"][:3])).input_names == ("flow",)
+    # columns 0 and "flow" were read by position as u1, u2, "flow" dropped without a word: a name said is kept
+    # or the frame refused (here), as a dict's keys; input_names= reads it by position
+    mixed = pd.DataFrame({0: df.inlet, "flow": df.flow})
+    for make in (lambda x: gb.Record(x, y), lambda x: gb.StaticPoints(x.iloc[:3], [1.0, 2.0, 3.0]),
+                 lambda x: gb.StaticPoints.from_repeats(x.iloc[:3], [1.0, 2.0, 3.0])):
+        with pytest.raises(ValueError, match=r"the DataFrame's columns \[0, 'flow'\] name some inputs \(\['flow'\]\) "
+                                             r"and not others \(\[0\]\).*input_names="):
+            make(mixed)
+    assert gb.Record(mixed, y, input_names=("T", "q")).input_names == ("T", "q")

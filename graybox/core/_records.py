@@ -98,20 +98,28 @@ def points_by_name(x: object, names: Sequence[str] | None, name: str) -> tuple[o
     return frame, (keys if names is None else names)
 
 
-def frame_names(x: object, names: Sequence[str] | None, *, column: bool = False) -> Sequence[str] | None:
+def frame_names(x: object, names: Sequence[str] | None, name: str, *, column: bool = False
+                ) -> Sequence[str] | None:
     """The inputs' names of samples or levels ``x``: ``names`` where given (a DataFrame then read by name where its
     columns are those names, by position where they name none); else a DataFrame's column labels where each is text
     (``flow``, ``inlet``), as a dict's keys are (:func:`points_by_name`), not pandas' default 0, 1, … nor other
     numbers; ``column``: a Series whose index labels are no text (a column, not a row) is samples or levels of one
     input, whose text name (``df["flow"]``) then names it as ``df[["flow"]]``'s column does; None (the default names
-    ``u`` / ``u1 … um``) for anything else."""
+    ``u`` / ``u1 … um``) for anything else. Text labels beside others (``0`` and ``"flow"``) are refused
+    (``ValueError``, prefixed by ``name``): read by position, the names said were dropped."""
     if (names is None and column and _is_series(x) and isinstance(getattr(x, "name", None), str)
             and getattr(x.index, "inferred_type", "") != "string"):  # type: ignore[attr-defined]
         return (x.name,)  # type: ignore[attr-defined]  (labels of text: a row, one point by its labels)
     if names is not None or not is_frame(x):
         return names
     labels = list(x.columns)  # type: ignore[attr-defined]
-    return tuple(labels) if labels and all(isinstance(c, str) for c in labels) else None
+    text = [c for c in labels if isinstance(c, str)]
+    if text and len(text) < len(labels):
+        other = [c for c in labels if not isinstance(c, str)]
+        raise ValueError(f"{name}: the DataFrame's columns {labels!r} name some inputs ({text!r}) "
+                         f"and not others ({other!r}): name every input column by text (df.rename(columns=...)), or "
+                         "give input_names= to read the columns by position")
+    return tuple(labels) if text else None
 
 
 #: What an input name given by a DataFrame's column is called in messages.
@@ -359,7 +367,8 @@ class Record(Relocked):
         stored 1-D (an (N, 1) array is flattened), several as a C-contiguous (N, m) array. A
         DataFrame's text column names are the ``input_names`` where those are not given (``df[["flow",
         "inlet"]]``: the inputs flow and inlet, as a dict's keys name them; one that cannot name an input, such
-        as ``"flow rate"`` or ``"e"``, is refused); pandas' default columns 0, 1 … give the default names. A
+        as ``"flow rate"`` or ``"e"``, is refused); pandas' default columns 0, 1 … give the default names,
+        and columns naming some inputs by text but not others (``0`` and ``"flow"``) are refused. A
         DataFrame whose columns are the ``input_names`` given is read by
         name, in any column order; one whose columns name none of them, by position; one whose
         columns name some of them is refused (``ValueError`` naming the columns), as is one that
@@ -394,7 +403,7 @@ class Record(Relocked):
     def __post_init__(self) -> None:
         check_str(self.name, "Record: name")  # a label every message and file carries
         # a frame's columns (a Series' name) name its inputs, as a dict's keys do
-        given = frame_names(self.u, self.input_names, column=True)
+        given = frame_names(self.u, self.input_names, f"{self.name}: u", column=True)
         own = given is not self.input_names
         u = as_input_array(self.u, f"{self.name}: u", given, output=self.y, own=own)
         y = as_1d_finite(self.y, f"{self.name}: y")
@@ -512,7 +521,8 @@ class StaticPoints(Relocked):
     def __post_init__(self) -> None:
         check_str(self.name, "StaticPoints: name")
         ubar, given = points_by_name(self.ubar, self.input_names, f"{self.name}: ubar")
-        named = frame_names(ubar, given, column=True)  # a frame's columns name its inputs, as a dict's keys do
+        # a frame's columns name its inputs, as a dict's keys do
+        named = frame_names(ubar, given, f"{self.name}: ubar", column=True)
         own, given = named is not given, named
         u = as_input_array(ubar, f"{self.name}: ubar", given, output=output_series(self.ybar), row="point")
         y = as_1d_finite(self.ybar, f"{self.name}: ybar")
@@ -592,7 +602,8 @@ class StaticPoints(Relocked):
         """
         check_str(name, "StaticPoints: name")
         ubar, input_names = points_by_name(ubar, input_names, f"{name}: ubar")
-        input_names = frame_names(ubar, input_names, column=True)  # a frame's columns name its inputs, as keys do
+        # a frame's columns name its inputs, as a dict's keys do
+        input_names = frame_names(ubar, input_names, f"{name}: ubar", column=True)
         u = as_input_array(ubar, f"{name}: ubar", input_names, output=output_series(ybar), row="point")
         y = as_1d_finite(ybar, f"{name}: ybar")
         if u.shape[0] != y.shape[0]:

@@ -1656,7 +1656,8 @@ def _refuse_overflow(ub: np.ndarray, yb: np.ndarray, hy: np.ndarray, gain: np.nd
         what = " and ".join(f"the band of {k}" for k in over if over[k][i])
         how = "" if drawn else " (method='monte-carlo' draws it without the delta method's gradient)"
         leave = "leave" if " and " in what else "leaves"
-        raise ValueError(f"the band overflows at ū = {point_texts(np.asarray(ub))[i]} (ȳ = {yb[i]:g}): {what} {leave} "
+        at = point_texts(np.asarray(ub))[i]
+        raise ValueError(f"the band overflows at ū = {at} (ȳ = {yb[i]:g}): {what} {leave} "
                          f"the float range (±1.8e308){how}; give levels where the static map and its band are floats")
 
 
