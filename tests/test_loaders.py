@@ -49,13 +49,23 @@ def test_time_stamps_may_start_anywhere(tmp_path):
     assert r.Ts == 0.5 and r.t[0] == 0.0
 
 
-@pytest.mark.parametrize("col", ["t [ms]", "time (min)", "t_ms", "Zeit/h", "t [µs]"])
-def test_a_time_column_named_in_another_unit_is_refused(tmp_path, col):
-    # was: stamps 0, 500, 1000 ms read as seconds, Ts = 500 s without a word (local models' time
-    # constants and every controller designed on them off by 1000)
+@pytest.mark.parametrize("col, seconds", [("t [ms]", 0.5), ("time (min)", 30_000.0), ("t_ms", 0.5), ("Zeit/h", 1.8e6),
+                                          ("t [µs]", 5e-4), ("t_millis", 0.5), ("T (Days)", 4.32e7)])
+def test_a_time_column_named_in_another_unit_is_converted_as_a_units_rows(tmp_path, col, seconds):
+    # was: stamps 0, 500, 1000 ms read as seconds, Ts = 500 s without a word (local models' time constants and every
+    # controller designed on them off by 1000); then refused, where a units row's 'ms' converted (mend61e's 1ad8ce0d)
     p = write(tmp_path, f"{col},u,y\n0,1,2\n500,1,2\n1000,1,3\n")
-    with pytest.raises(ValueError, match=re.escape(repr(col)) + r" names its unit .*read as seconds.*Ts="):
-        load_record_csv(p, u="u", y="y", time=col)
+    assert load_record_csv(p, u="u", y="y", time=col).Ts == seconds  # 500 of the unit, in seconds by hand
+    unit = "ms" if "ms" in col else "s"
+    q = write(tmp_path, f"{col},u,y\n[{unit}],,\n0,1,2\n500,1,2\n1000,1,3\n", "row.csv")
+    if unit == "ms":  # the same unit in both: converted once
+        assert load_record_csv(q, u="u", y="y", time=col, units_row=True).Ts == 0.5
+    else:
+        with pytest.raises(ValueError, match=re.escape(repr(col)) + r" names its unit .*the units row gives it 's'"):
+            load_record_csv(q, u="u", y="y", time=col, units_row=True)
+    with pytest.raises(ValueError, match=re.escape(repr(col)) + r" names the unit .*holds dates or clock times"):
+        load_record_csv(write(tmp_path, f"{col},u,y\n2026-11-20 09:14:03,1,2\n2026-11-20 09:14:04,1,2\n", "d.csv"),
+                        u="u", y="y", time=col)
     for ok in ("t [s]", "time_s", "Zeit (s)", "timestamp"):  # seconds, or no unit named: read as before
         q = write(tmp_path, f"{ok},u,y\n0,1,2\n0.5,1,2\n1.0,1,3\n", "ok.csv")
         assert load_record_csv(q, u="u", y="y", time=ok).Ts == 0.5

@@ -447,21 +447,24 @@ def _unbracket(cell: str) -> str:
     return c if m is None else (m.group(1) if m.group(1) is not None else m.group(2)).strip()
 
 
-#: The units of elapsed time a units row may give a time column of numbers: (multiply, divide) that make them seconds
-#: (a division by 1000 rounds 1010 ms to the float nearest 1.01 s, where a product with 1e-3 rounds twice).
+#: The units of elapsed time a units row or the time column's name may give a time column of numbers: (multiply,
+#: divide) that make them seconds (a division by 1000 rounds 1010 ms to the float nearest 1.01 s, where a product with
+#: 1e-3 rounds twice). Every unit of :data:`_OTHER_UNITS` is here.
 _TIME_UNITS = {**dict.fromkeys(("", "s", "sec", "secs", "second", "seconds"), (1, 1)),
-               **dict.fromkeys(("ms", "msec", "millisecond", "milliseconds"), (1, 1000)),
-               **dict.fromkeys(("us", "µs", "μs", "usec", "microsecond", "microseconds"), (1, 10**6)),
+               **dict.fromkeys(("ms", "msec", "millis", "millisecond", "milliseconds"), (1, 1000)),
+               **dict.fromkeys(("us", "µs", "μs", "usec", "micros", "microsecond", "microseconds"), (1, 10**6)),
                **dict.fromkeys(("ns", "nsec", "nanosecond", "nanoseconds"), (1, 10**9)),
                **dict.fromkeys(("min", "mins", "minute", "minutes"), (60, 1)),
                **dict.fromkeys(("h", "hr", "hrs", "hour", "hours"), (3600, 1)),
                **dict.fromkeys(("d", "day", "days"), (86400, 1))}
 
 
-def _time_in_seconds(p: Path, unit: str, t: np.ndarray, stamps: Sequence[str] | None) -> np.ndarray:
-    """The numbers of a time column whose units row gives ``unit`` as seconds (``ms``, ``µs``/``us``, ``ns``,
-    ``min``, ``h``, ``d`` converted); dates and clock times (``stamps`` not None) carry their own unit: a units row
-    giving them one other than seconds (or ``TS``, a TOA5 file's TIMESTAMP) is refused, as is an unknown unit."""
+def _time_in_seconds(p: Path, unit: str, t: np.ndarray, stamps: Sequence[str] | None,
+                     source: str = "the units row gives the time column") -> np.ndarray:
+    """The numbers of a time column whose units row (or name: ``source`` says which, for the messages) gives
+    ``unit`` as seconds (``ms``, ``µs``/``us``, ``ns``, ``min``, ``h``, ``d`` converted); dates and clock times
+    (``stamps`` not None) carry their own unit: a units row giving them one other than seconds (or ``TS``, a TOA5
+    file's TIMESTAMP) is refused, as is an unknown unit."""
     key = unit.strip().lower()
     if key == "ts" or (stamps is not None and _TIME_UNITS.get(key) == (1, 1)):
         return t
@@ -471,7 +474,7 @@ def _time_in_seconds(p: Path, unit: str, t: np.ndarray, stamps: Sequence[str] | 
     known = "s, ms, µs (us), ns, min, h or d"
     said = (f"the time column holds dates or clock times ({stamps[0]!r}), which carry their own unit"
             if stamps is not None else f"graybox converts the units of elapsed time {known} to seconds")
-    raise ValueError(f"{p}: the units row gives the time column the unit {unit!r}, but {said}: convert the column "
+    raise ValueError(f"{p}: {source} the unit {unit!r}, but {said}: convert the column "
                      "to seconds, or leave time= out and give Ts= in seconds")
 
 
@@ -1119,8 +1122,9 @@ def load_record_csv(
     y : str
         Name of the output column.
     time : str, optional
-        Name of a time-stamp column: seconds as numbers (a column whose name states another unit,
-        e.g. ``t [ms]``, ``time (min)``, ``t_ms``, or ticks of one, ``Zeit [10ms]``, is refused, and so are numbers
+        Name of a time-stamp column: seconds as numbers (a column whose name states another unit of elapsed
+        time, e.g. ``t [ms]``, ``time (min)``, ``t_ms``, is converted to seconds as a units row's is, and a name
+        and a units row giving two units are refused; ticks of one, ``Zeit [10ms]``, are refused, and so are numbers
         that are a spreadsheet's serial dates, MATLAB's datenums or Unix time counted in ms, µs or ns), ISO 8601
         dates and times (``2026-11-20 09:14:03.5``, ``2026-11-20T09:14:03Z``, a TOA5 file's ``TIMESTAMP``; with a
         UTC offset the elapsed time is read, so a clock change is no jump, while local times without one that jump
@@ -1231,11 +1235,25 @@ def load_record_csv(
     if "_record" in cols:
         _check_record_numbers(p, cols["_record"], lines)
     if time is not None:
-        t = cols["time"]
-        if "_units" in cols:  # elapsed time in ms, min … as the units row says: seconds
-            t = _time_in_seconds(p, cols["_units"].get("time", ""), t, cols.get("_stamps"))
+        t = _time_column_seconds(p, time, cols["time"], cols.get("_units"), cols.get("_stamps"))
         Ts = _check_time(p, time, t, lines, Ts, time_rtol, cols.get("_stamps"))
     return Record(_inputs(cols, ucols), cols["y"], Ts=float(Ts), name=name or p.stem, units=units, input_names=names)
+
+
+def _time_column_seconds(p: Path, col: str, t: np.ndarray, row: dict[str, str] | None,
+                         stamps: Sequence[str] | None) -> np.ndarray:
+    """The time column ``col``'s numbers ``t`` in seconds: elapsed time in ms, min … as its name (``t [ms]``,
+    ``t_ms``) or the units row ``row`` says, through one table (:data:`_TIME_UNITS`); a name and a units row that
+    give two units are refused naming both. A tick in the name (``t [10ms]``) is refused by :func:`_check_time`."""
+    named = _TIME_UNIT.search(col)
+    said = "" if row is None else row.get("time", "")
+    if named is None or named.group(1) is None:
+        return t if row is None else _time_in_seconds(p, said, t, stamps)
+    unit = named.group(1)
+    if said.strip() and _TIME_UNITS.get(said.strip().lower()) != _TIME_UNITS[unit.lower()]:
+        raise ValueError(f"{p}: column {col!r} names its unit {unit!r}, but the units row gives it {said!r}: correct "
+                         "the one that is wrong")
+    return _time_in_seconds(p, unit, t, stamps, source=f"column {col!r} names")
 
 
 def _wanted(ucols: Sequence[str], y: str, **more: str | None) -> dict[str, str]:
@@ -1536,10 +1554,10 @@ def _check_time(p: Path, col: str, t: np.ndarray, lines: np.ndarray, Ts: float |
         return f"{t[i]:g} s" if shown is None else repr(shown[i])
 
     unit = _TIME_UNIT.search(col)
-    if unit:  # read as seconds they would give a sampling period off by 1000 or 60 without a word
-        raise ValueError(f"{p}: column {col!r} names its unit {unit.group(1) or unit.group(2)!r}, but time stamps are read as seconds: "
-                         "convert the column to seconds, or leave time= out and give the sampling period Ts= in "
-                         "seconds")
+    if unit and unit.group(2):  # a tick (a unit alone was converted): read as seconds, a period off by 10 or 1000
+        raise ValueError(f"{p}: column {col!r} names its unit {unit.group(2)!r}, but time stamps are read as seconds "
+                         "(a unit alone, t [ms], is converted, not a tick of one): convert the column to seconds, or "
+                         "leave time= out and give the sampling period Ts= in seconds")
     if t.size < 2:
         raise ValueError(f"{p}: column {col!r} has a single time stamp; the sampling period needs two")
     if shown is None:  # before the steps are judged: printed with 11 digits, serial dates step unevenly, or by 0
