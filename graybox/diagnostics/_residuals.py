@@ -391,9 +391,9 @@ class ResidualTests(Relocked):
         if self.undefined:
             verdict += f"; {len(self.undefined)} undefined on these data ({', '.join(self.undefined)})"
         drawn = any(t.permutations for t in self.tests.values())
-        seed = "" if not drawn else f", seed {self.seed}" if self.seed is not None else ", seed unknown"
-        return (f"ResidualTests({self.model_name or 'model'}: N = {self.n}, {self.rule} {percent_text(self.level)}"
-                f"{seed}; {verdict})")
+        seed = "" if not drawn else f"; seed {self.seed}" if self.seed is not None else "; seed unknown"
+        return (f"ResidualTests({self.model_name or 'model'}: N = {self.n}, {self.rule} {percent_text(self.level)}; "
+                f"{verdict}{seed})")
 
 
 # --------------------------------------------------------------------------------------------
