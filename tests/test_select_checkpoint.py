@@ -264,3 +264,23 @@ def test_a_newer_graybox_row_is_kept_unread_and_written_back(tmp_path, data, mon
     write_atomically(path, lambda f: np.savez(f, **arrays))
     with pytest.raises(ValueError, match="corrupt"):
         SelectionCheckpoint(path)
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float16])
+def test_a_row_rewritten_in_another_precision_is_refused(tmp_path, dtype):
+    # a row whose thetas another tool rewrote as float32 was resumed with θ rounded (3e-9 off), without a word
+    from graybox.estimation._simulation_error import CheckpointError
+    from graybox.experiments._select_checkpoint import SelectionCheckpoint
+
+    path, key = tmp_path / "sel.npz", "0" * 32
+    row = {"blocks": np.array([[1.0, 2.0]]), "weights": np.array([1.0, 1.0]), "jsf": np.array([0.5]),
+           "jsf_full": np.array([0.5]), "thetas": np.array([[0.1 + 1e-9, 0.2]]), "lambdas": np.array([0.5]),
+           "failed": [], "warnings": []}
+    SelectionCheckpoint(path).put(key, row)
+    assert SelectionCheckpoint(path).get(key)["thetas"].tolist() == row["thetas"].tolist()
+    with np.load(path) as z:
+        arrays = dict(z)
+    arrays[f"{key}/thetas"] = arrays[f"{key}/thetas"].astype(dtype)
+    np.savez(path, **arrays)
+    with pytest.raises(CheckpointError, match=f"corrupt \\(a row's thetas is {np.dtype(dtype)}, not the float64"):
+        SelectionCheckpoint(path)

@@ -208,6 +208,8 @@ def _row_problem(row: Mapping[str, np.ndarray]) -> str:
     for f, v in arrays.items():
         if v.dtype.kind not in "fi":
             return f"{f} is not numbers ({v.dtype})"
+        if v.dtype.kind == "f" and v.dtype != np.float64:  # rewritten as float32 by another tool: its θ rounded
+            return f"{f} is {v.dtype}, not the float64 a fit writes (its values were rounded)"
     blocks, thetas = arrays["blocks"], arrays["thetas"]
     if blocks.ndim != 2 or 0 in blocks.shape:
         return f"blocks has shape {blocks.shape}, not (members, blocks)"
