@@ -96,7 +96,7 @@ class DaskRecord:
     y: Any
     Ts: float = 1.0
     name: str = "record"  # as a Record's: messages said "'' is sampled every 1 s but '' every 2 s"
-    units: tuple[str, str] = ("", "")
+    units: tuple[str | tuple[str, ...], str] = ("", "")
 
     def __post_init__(self) -> None:
         check_str(self.name, "DaskRecord: name")

@@ -1088,7 +1088,7 @@ def load_record_csv(
     time: str | None = None,
     Ts: float | None = None,
     name: str | None = None,
-    units: tuple[str, str] = ("", ""),
+    units: tuple[str | tuple[str, ...], str] = ("", ""),
     time_rtol: float = 1e-3,
     input_names: Sequence[str] | None = None,
     delimiter: str | None = None,
@@ -1678,7 +1678,7 @@ def load_static_csv(
     uncertainty: float | Sequence[float] | str | None = None,
     encoding: str | None = None,
     skiprows: int | None = None,
-    units: tuple[str, str] = ("", ""),
+    units: tuple[str | tuple[str, ...], str] = ("", ""),
     units_row: bool | None = None,
 ) -> StaticPoints:
     """Measured static points (ū_i, ȳ_i) from a CSV file.

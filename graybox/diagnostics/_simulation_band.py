@@ -74,7 +74,7 @@ class SimulationBand(Relocked):
     diverged: float
     model_name: str = ""
     record_name: str = ""
-    units: tuple[str, str] = ("", "")
+    units: tuple[str | tuple[str, ...], str] = ("", "")
 
     def __post_init__(self) -> None:
         check_fields(self)

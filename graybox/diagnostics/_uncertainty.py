@@ -1485,7 +1485,7 @@ class StaticCurveBand(Relocked):
     n_samples: int
     undefined: np.ndarray
     model_name: str = ""
-    units: tuple[str, str] = ("", "")
+    units: tuple[str | tuple[str, ...], str] = ("", "")
 
     def __post_init__(self) -> None:
         check_fields(self)
@@ -1549,7 +1549,7 @@ class StaticSurfaceBand(Relocked):
     n_samples: int
     undefined: np.ndarray
     model_name: str = ""
-    units: tuple[str, str] = ("", "")
+    units: tuple[str | tuple[str, ...], str] = ("", "")
 
     def __post_init__(self) -> None:
         check_fields(self)

@@ -428,7 +428,7 @@ class NeuralModel(Relocked):
     name: str = "Neural"
     input_names: tuple[str, ...] = ("u",)
     Ts: float | None = None
-    units: tuple[str, str] = ("", "")
+    units: tuple[str | tuple[str, ...], str] = ("", "")
 
     def __post_init__(self) -> None:
         check_str(self.name, "name")

@@ -102,7 +102,7 @@ class SEMPResult(Relocked):
     n_rows: int
     input_names: tuple[str, ...] | None = None
     Ts: float | None = None
-    units: tuple[str, str] = ("", "")
+    units: tuple[str | tuple[str, ...], str] = ("", "")
 
     #: Columns every path holds (a loaded file is checked against them).
     PATH_COLUMNS = ("step", "action", "term", "n_terms", "score", "criterion", "structure")
