@@ -105,3 +105,45 @@ def test_a_kernel_compiles_once_whether_its_arrays_are_read_only_or_not(paper_re
     runs(frozen, strided, np.array(y))
     runs(theta, np.array(u), y)
     assert [len(k.signatures) for k in kernels] == before
+
+
+@pytest.mark.parametrize("terms", [
+    None,  # the paper's model (15): single past outputs through the inputs, lags to 6
+    ["y(k-1)", "y(k-2)", "u(k-1)", "1"],  # constant linear feedback
+    ["y(k-1)^2", "y(k-2)u(k-1)^2", "y(k-1)y(k-3)", "u(k-1)"],  # output power 2 only, with and without inputs
+    ["u(k-1)", "u(k-2)^2", "1"],  # no output at all
+])
+def test_the_codes_bound_facts_are_the_structures(terms):
+    # the default bound reads these plain-int facts at every call in place of the code's arrays: they must say what
+    # the terms say (recounted here from the terms' own factors)
+    from graybox import parse_structure
+
+    st = reference.paper_model(15).structure if terms is None else parse_structure(terms)
+    code = encode(st)
+    ypow = [sum(p for s, _, p in t.factors if s == "y") for t in st]
+    single = [(i, next(l for s, l, _ in t.factors if s == "y")) for i, t in enumerate(st) if ypow[i] == 1]
+    assert list(code.single) == single
+    assert code.single_inputs == any(any(s != "y" for s, _, _ in st[i].factors) for i, _ in single)
+    assert list(code.nonlinear) == [(i, p) for i, p in enumerate(ypow) if p >= 2]
+
+
+def test_free_run_fast_paths_give_the_checked_paths_numbers(paper_record):
+    # a finite float64 θ skips check_theta's conversions and a record's own first outputs skip y0's: the run must be
+    # bit-identical to the one through the full conversions (θ a list, u an array, y0 given), and a θ the fast path
+    # must not take is still refused
+    from graybox import simulate
+
+    m = reference.paper_model(15)
+    L = m.max_lag
+    fast = m.simulate(paper_record)
+    slow = simulate(m.structure, m.theta.tolist(), np.array(paper_record.u), np.array(paper_record.y[:L]).tolist())
+    np.testing.assert_array_equal(fast, slow)
+    np.testing.assert_array_equal(simulate(m.structure, np.array(m.theta), paper_record), fast)
+    bad = np.array(m.theta)
+    bad[3] = np.nan
+    with pytest.raises(ValueError, match="non-finite"):
+        simulate(m.structure, bad, paper_record)
+    with pytest.raises(ValueError, match="values but the structure has"):
+        simulate(m.structure, np.append(m.theta, 0.0), paper_record)
+    with pytest.raises(ValueError, match="bound"):
+        simulate(m.structure, m.theta, paper_record, bound=-1.0)

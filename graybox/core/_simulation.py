@@ -137,8 +137,9 @@ def free_run_inputs(
         if len(u) < L + 1:  # named as the record it is: "y0 has 1 samples" spoke of an argument never passed
             raise ValueError(f"{u.name}: record has {len(u)} samples, fewer than max lag + 1 = {L + 1} (the {what} "
                              f"needs max lag = {L})")
-        if y0 is None:
-            y0 = u.y[:L]
+        if y0 is None:  # a record's outputs are finite, 1-D, read-only and contiguous already: no copy, no check
+            b = None if bound is None else check_real(bound, "bound", low=0, low_open=True)
+            return np.ascontiguousarray(u.u), np.ascontiguousarray(u.y[:L]), b
         u = u.u
     else:
         # "u must be an array of numbers" said nothing of which record to pass, nor where a DaskRecord is taken
@@ -222,7 +223,7 @@ def simulate(
     if input_names is None and carried is not None and len(carried) > 1:
         input_names = carried  # a model's array is read in its own column order, as Model.simulate reads it
     structure = structure_of(structure)
-    th = check_theta(len(structure), theta)
+    th = _checked_theta(len(structure), theta)
     check_choice(on_diverge, "on_diverge", ("raise", "nan"))
     L = structure.max_lag
     if isinstance(u, Record):  # validated already: no copy
@@ -287,6 +288,15 @@ def simulate_many(
     record.require_length(L)
     code = encode(structure)
     return simulate_batch(code, th, record_inputs(record, code.input_names), record.y[:L], L, threads, bounded=True)
+
+
+def _checked_theta(n_terms: int, theta: object) -> np.ndarray:
+    """θ as :func:`check_theta` gives it, without its conversions where ``theta`` already is a finite float64 vector
+    of ``n_terms`` values (a model's own, 6 µs of a 50 µs free run); anything else goes through check_theta."""
+    if (type(theta) is np.ndarray and theta.dtype == np.float64 and theta.shape == (n_terms,)
+            and np.isfinite(theta).all()):
+        return theta
+    return check_theta(n_terms, theta)
 
 
 def _inputs_for(structure: Structure, u: np.ndarray, input_names: object):
