@@ -147,3 +147,21 @@ def test_free_run_fast_paths_give_the_checked_paths_numbers(paper_record):
         simulate(m.structure, np.append(m.theta, 0.0), paper_record)
     with pytest.raises(ValueError, match="bound"):
         simulate(m.structure, m.theta, paper_record, bound=-1.0)
+
+
+def test_a_population_stops_where_each_members_own_run_does(paper_record):
+    # the batch kernel tests the bound with a loop that stores nothing and only then updates the members: members
+    # that diverge at different samples (some never) beside stable ones, before and after the first stop, must stop
+    # at the very sample their own free runs stop, and the others run on as their own runs do
+    m = reference.paper_model(15)
+    thetas = np.tile(m.theta, (6, 1))
+    thetas[:, 0] = [m.theta[0], 1.02, m.theta[0] * 0.999, 1.3, m.theta[0] * 1.001, 3.0]  # the y(k-1) coefficient
+    Y = simulate_many(m.structure, thetas, paper_record)
+    stops = []
+    for i, th in enumerate(thetas):
+        own = Model(m.structure, th).simulate(paper_record, on_diverge="nan")
+        np.testing.assert_array_equal(np.isnan(Y[i]), np.isnan(own))
+        np.testing.assert_allclose(Y[i][np.isfinite(own)], own[np.isfinite(own)], rtol=1e-12)
+        stops.append(int(np.argmax(np.isnan(own))) if np.isnan(own).any() else None)
+    assert stops[0] is None and stops[2] is None and stops[4] is None
+    assert len({s for s in stops if s is not None}) == 3  # three members stop, each at a sample of its own

@@ -412,6 +412,12 @@ def _push_margin(c1, c2, margin):  # pragma: no cover - compiled
     if margin < 0.0:  # the feedback through the inputs: its poles at this sample
         pm = pole_margin(c1, c2)
         return 1.0 if pm > 1.0 else pm
+    return _steady_margin(c1, c2, margin)
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def _steady_margin(c1, c2, margin):  # pragma: no cover - compiled
+    # _push_margin for a ``margin`` in [0, 1] (a constant feedback's, or none): the steady gain's, at most margin
     d = 1.0 - (c1 + c2)
     d = d if 0.0 < d < 1.0 else 1.0
     return min(d, margin)
@@ -832,14 +838,42 @@ def _batch_block(thT, U, ny, ylag, Y, start, ref, margin):  # pragma: no cover -
     xacc = np.empty(P)
     cacc = np.empty((2, P))
     poles = bounded and margin.shape[0] > 0 and margin.min() < 0.0
+    # every margin in [0, 1] (a constant feedback's, or the steady gain's first pass of linear_margins' −2): the
+    # bound's test needs no pole test's branches (_bound_hit)
+    steady = bounded and margin.shape[0] > 0 and margin.min() >= 0.0 and margin.max() <= 1.0
     cut = np.zeros(P, dtype=np.bool_)
     for k in range(start, n):
         _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, cacc, bounded)
-        if bounded:
+        if bounded and _bound_hit(ref, bnd, xacc, cacc, acc, margin, poles, steady):
             _bound_members(ref, bnd, xacc, cacc, acc, margin, poles, cut)
         for p in range(P):
             Y[k, p] = acc[p]
     return cut
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def _bound_hit(ref, bnd, xacc, cacc, acc, margin, poles, steady):  # pragma: no cover - compiled
+    # whether _bound_members has anything to do at this sample: some member's scale grows or its sample leaves its
+    # bound. Its own loop's stores on those rare events kept it scalar (the bound doubled a batch run's cost); this
+    # loop stores nothing, and where it says no (nearly every sample) _bound_members' would have changed nothing
+    P = acc.shape[0]
+    hit = False
+    if poles:
+        for p in range(P):
+            d = pole_margin(cacc[0, p], cacc[1, p])
+            d = d if d <= 1.0 else 1.0
+            hit |= (abs(xacc[p]) > ref[p] * d) | (not (abs(acc[p]) <= bnd[p]))
+    elif steady:
+        for p in range(P):
+            d = _steady_margin(cacc[0, p], cacc[1, p], margin[p])
+            d = d if d <= 1.0 else 1.0
+            hit |= (abs(xacc[p]) > ref[p] * d) | (not (abs(acc[p]) <= bnd[p]))
+    else:
+        for p in range(P):
+            d = _push_margin(cacc[0, p], cacc[1, p], margin[p])
+            d = d if d <= 1.0 else 1.0
+            hit |= (abs(xacc[p]) > ref[p] * d) | (not (abs(acc[p]) <= bnd[p]))
+    return hit
 
 
 @nb.njit(cache=True, nogil=True)
@@ -1003,6 +1037,9 @@ def _batch_sse(thT, U, ny, ylag, y, start, ring, ref, margin):  # pragma: no cov
     xacc = np.empty(P)
     cacc = np.empty((2, P))
     poles = bounded and margin.shape[0] > 0 and margin.min() < 0.0
+    # every margin in [0, 1] (a constant feedback's, or the steady gain's first pass of linear_margins' −2): the
+    # bound's test needs no pole test's branches (_bound_hit)
+    steady = bounded and margin.shape[0] > 0 and margin.min() >= 0.0 and margin.max() <= 1.0
     cut = np.zeros(P, dtype=np.bool_)
     for k in range(start, n):
         _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, cacc, bounded)
