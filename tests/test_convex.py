@@ -549,3 +549,40 @@ def test_results_are_immutable(rec):
         ps.thetas[0, 0] = 1.0
     with pytest.raises(Exception):
         ps.method = "x"
+
+
+def test_the_closed_forms_rank_test_is_the_svd_rule():
+    # the closed form judges most stacks by cheap bounds from the inverse and only the others by their SVD: on
+    # matrices whose condition numbers straddle the threshold, singular ones, non-square ones and non-finite ones,
+    # its verdicts must be the SVD rule's, each matrix alone and all in one batch
+    from graybox.core._least_squares import rank_tolerance
+    from graybox.estimation._prediction_error import _singular_stacks
+
+    rng = np.random.default_rng(3)
+    tol = rank_tolerance(1.0, 3200, 17)
+    mats = []
+    for cond in [1.0, 1e3, 1e8, 0.2 / tol, 0.9 / tol, 1.1 / tol, 5.0 / tol, 1e20]:
+        U, _ = np.linalg.qr(rng.standard_normal((17, 17)))
+        V, _ = np.linalg.qr(rng.standard_normal((17, 17)))
+        mats.append(np.linalg.qr((U * np.geomspace(1.0, 1.0 / cond, 17)) @ V.T, mode="r") * 10.0 ** rng.integers(-9, 9))
+    singular = np.triu(rng.standard_normal((17, 17)))
+    singular[4, 4] = 0.0
+    mats.append(singular)
+    R = np.array(mats)
+
+    def by_svd(M):
+        sv = np.linalg.svd(M, compute_uv=False)
+        return sv[..., -1] <= tol * sv[..., 0]
+
+    want = by_svd(R)
+    assert want.tolist() == [False] * 5 + [True] * 4  # the cases straddle the threshold as meant
+    np.testing.assert_array_equal(_singular_stacks(R, tol), want)
+    for M, w in zip(R, want):
+        assert _singular_stacks(M[None], tol).tolist() == [w]
+    wide = rng.standard_normal((3, 10, 17))  # fewer rows than columns: rank-deficient, by the SVD rule
+    np.testing.assert_array_equal(_singular_stacks(wide, tol), by_svd(wide))
+    with np.errstate(all="ignore"):
+        nan = R[:2].copy()
+        nan[0, 0, 0] = np.nan
+        with pytest.raises(np.linalg.LinAlgError):  # as the SVD of a NaN stack always did
+            _singular_stacks(nan, tol)

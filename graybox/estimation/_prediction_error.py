@@ -1169,14 +1169,35 @@ def _closed_form(d: _Data, static: tuple[np.ndarray, np.ndarray] | None, rows: _
     rhs = np.concatenate([np.sqrt(w)[:, None] * (c - A @ z_p)[None] for A, c, w in blocks], axis=1)
     Qb, Rb = np.linalg.qr(B)
     # the one rank rule (core._least_squares.rank_tolerance) on the weighted stack actually solved
-    sv = np.linalg.svd(Rb, compute_uv=False)
-    bad = sv[:, -1] <= rank_tolerance(1.0, d.N + n_static, n) * sv[:, 0]
+    bad = _singular_stacks(Rb, rank_tolerance(1.0, d.N + n_static, n))
     out = np.full((len(w1), n), np.nan)
     good = ~bad
     if good.any():
         wv = np.linalg.solve(Rb[good], np.einsum("kij,ki->kj", Qb[good], rhs[good])[..., None])[..., 0]
         out[good] = z_p[None, :] + wv @ Nb.T
     return out
+
+
+def _singular_stacks(R: np.ndarray, tol: float) -> np.ndarray:
+    """Whether σ_min <= ``tol`` · σ_max for each of the K matrices ``R`` (K, r, c), shape (K,) bool.
+
+    The SVD of every matrix cost half the closed form's time (100 λ: 1.2 of 3.5 ms); where R is square its inverse
+    bounds both ends first (σ_max <= ‖R‖_F, σ_min >= 1 / ‖R⁻¹‖_F), and a matrix whose bounds clear the rule by a
+    factor 10 is regular whatever rounding the inverse carries (its error is about cond · eps, below 1/10 there).
+    Only the others, near the threshold or singular, are judged by their singular values, as all were."""
+    undecided = np.ones(R.shape[0], dtype=bool)
+    if R.shape[0] and R.shape[1] == R.shape[2] and np.all(np.isfinite(R)):
+        try:
+            with np.errstate(all="ignore"):  # a near-singular R: an inverse of huge entries, its norm inf
+                low = 1.0 / np.linalg.norm(np.linalg.inv(R), axis=(1, 2))
+                undecided = ~(low > 10.0 * tol * np.linalg.norm(R, axis=(1, 2)))
+        except np.linalg.LinAlgError:  # an exactly singular one (numpy inverts the batch or none)
+            pass
+    bad = np.zeros(R.shape[0], dtype=bool)
+    if undecided.any():
+        sv = np.linalg.svd(R[undecided], compute_uv=False)
+        bad[undecided] = sv[:, -1] <= tol * sv[:, 0]
+    return bad
 
 
 #: Why the closed form gives a weight pair no θ (a NaN row of :func:`_closed_form`).
