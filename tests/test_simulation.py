@@ -165,3 +165,22 @@ def test_a_population_stops_where_each_members_own_run_does(paper_record):
         stops.append(int(np.argmax(np.isnan(own))) if np.isnan(own).any() else None)
     assert stops[0] is None and stops[2] is None and stops[4] is None
     assert len({s for s in stops if s is not None}) == 3  # three members stop, each at a sample of its own
+
+
+def test_a_populations_bounded_sse_is_each_members_own_runs(paper_record):
+    # batch_sse's bound is tested as simulate_many's (a loop that stores nothing first): members stopping at samples
+    # of their own have no finite J_S, the others exactly their own free run's squared error
+    from graybox.core._simulation_kernels import batch_sse
+
+    m = reference.paper_model(15)
+    thetas = np.tile(m.theta, (5, 1))
+    thetas[:, 0] = [m.theta[0], 1.02, m.theta[0] * 0.999, 1.3, 3.0]
+    L, r = m.max_lag, paper_record
+    sse = batch_sse(encode(m.structure), thetas, r.u, r.y, L, bounded=True)
+    for i, th in enumerate(thetas):
+        own = Model(m.structure, th).simulate(r, on_diverge="nan")
+        if np.isnan(own).any():
+            assert not np.isfinite(sse[i])
+        else:
+            np.testing.assert_allclose(sse[i], np.sum((own[L:] - r.y[L:]) ** 2), rtol=1e-10, atol=1e-18)
+    assert np.isfinite(sse).sum() == 2

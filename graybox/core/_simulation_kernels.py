@@ -853,26 +853,34 @@ def _batch_block(thT, U, ny, ylag, Y, start, ref, margin):  # pragma: no cover -
 
 @nb.njit(cache=True, nogil=True, inline="always")
 def _bound_hit(ref, bnd, xacc, cacc, acc, margin, poles, steady):  # pragma: no cover - compiled
-    # whether _bound_members has anything to do at this sample: some member's scale grows or its sample leaves its
-    # bound. Its own loop's stores on those rare events kept it scalar (the bound doubled a batch run's cost); this
-    # loop stores nothing, and where it says no (nearly every sample) _bound_members' would have changed nothing
+    # whether _bound_members has anything to do at this sample for a member still running: its scale grows or its
+    # sample leaves its bound. Its own loop's stores on those rare events kept it scalar (the bound doubled a batch
+    # run's cost); this loop's one store is unconditional: a stopped member's sample NaN (bound -1), as
+    # _bound_members makes it, and where it says no (nearly every sample) _bound_members would have changed nothing
+    # else. A stopped member is no hit: one member's divergence made every later sample take the scalar loop
     P = acc.shape[0]
     hit = False
     if poles:
         for p in range(P):
             d = pole_margin(cacc[0, p], cacc[1, p])
             d = d if d <= 1.0 else 1.0
-            hit |= (abs(xacc[p]) > ref[p] * d) | (not (abs(acc[p]) <= bnd[p]))
+            live = bnd[p] >= 0.0
+            hit |= live & ((abs(xacc[p]) > ref[p] * d) | (not (abs(acc[p]) <= bnd[p])))
+            acc[p] = acc[p] if live else np.nan
     elif steady:
         for p in range(P):
             d = _steady_margin(cacc[0, p], cacc[1, p], margin[p])
             d = d if d <= 1.0 else 1.0
-            hit |= (abs(xacc[p]) > ref[p] * d) | (not (abs(acc[p]) <= bnd[p]))
+            live = bnd[p] >= 0.0
+            hit |= live & ((abs(xacc[p]) > ref[p] * d) | (not (abs(acc[p]) <= bnd[p])))
+            acc[p] = acc[p] if live else np.nan
     else:
         for p in range(P):
             d = _push_margin(cacc[0, p], cacc[1, p], margin[p])
             d = d if d <= 1.0 else 1.0
-            hit |= (abs(xacc[p]) > ref[p] * d) | (not (abs(acc[p]) <= bnd[p]))
+            live = bnd[p] >= 0.0
+            hit |= live & ((abs(xacc[p]) > ref[p] * d) | (not (abs(acc[p]) <= bnd[p])))
+            acc[p] = acc[p] if live else np.nan
     return hit
 
 
@@ -1043,7 +1051,7 @@ def _batch_sse(thT, U, ny, ylag, y, start, ring, ref, margin):  # pragma: no cov
     cut = np.zeros(P, dtype=np.bool_)
     for k in range(start, n):
         _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, cacc, bounded)
-        if bounded:
+        if bounded and _bound_hit(ref, bnd, xacc, cacc, acc, margin, poles, steady):
             _bound_members(ref, bnd, xacc, cacc, acc, margin, poles, cut)
         kk = k & mask
         yk = y[k]
