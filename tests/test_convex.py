@@ -586,3 +586,25 @@ def test_the_closed_forms_rank_test_is_the_svd_rule():
         nan[0, 0, 0] = np.nan
         with pytest.raises(np.linalg.LinAlgError):  # as the SVD of a NaN stack always did
             _singular_stacks(nan, tol)
+
+
+def test_free_directions_skips_the_svd_only_where_the_rank_is_full():
+    # free_directions answers "no free direction" from the bounds of regular_by_bounds without an SVD: regressions
+    # whose condition numbers straddle the rank rule's threshold, and exactly rank-deficient ones, must leave as
+    # many free directions as numpy's own rank test (matrix_rank at the rule's tolerance) says
+    from graybox.core._least_squares import free_directions, rank_tolerance
+
+    rng = np.random.default_rng(5)
+    rows, n = 400, 8
+    tol = rank_tolerance(1.0, rows, n)
+    for cond in [1.0, 1e6, 0.3 / tol, 3.0 / tol, np.inf]:
+        U, _ = np.linalg.qr(rng.standard_normal((rows, n)))
+        V, _ = np.linalg.qr(rng.standard_normal((n, n)))
+        s = np.geomspace(1.0, 1.0 / cond, n) if np.isfinite(cond) else np.r_[np.ones(n - 2), 0.0, 0.0]
+        A = (U * s) @ V.T * np.sqrt(rows)
+        scaled = A / np.sqrt(rows)
+        scaled = scaled / np.sqrt(np.mean(scaled**2, axis=0))  # the columns at unit RMS, as free_directions takes them
+        sv = np.linalg.svd(scaled, compute_uv=False)
+        want = n - int(np.sum(sv > tol * sv[0]))
+        assert free_directions([(A, rows)]).shape == (n, want)
+        assert (want == 0) == (cond < 1.0 / tol)  # the cases fall on both sides as meant
