@@ -312,3 +312,13 @@ def test_static_points_beside_records_are_held_to_their_units_input_by_input():
     np.testing.assert_allclose(model.static_curve({"q": [5.0], "T": [40.0]}), [(0.5 + 0.8) / 0.4], rtol=1e-6)
     with pytest.raises(ValueError, match=r"input 'T' unit '°C' but .* has 'K'"):
         gb.cls(st, rec, gb.StaticPoints(ubar, ybar, input_names=("q", "T"), units=(("l/min", "K"), "m")))
+
+
+def test_a_band_on_a_record_of_more_inputs_takes_their_units_by_name():
+    # said_units merged per-input units by position: a model of (q, T) run on a record of (z, q, T), whose third
+    # unit the model's pair does not have, raised IndexError
+    rec = _two_inputs((("l/min", "°C"), "m"))
+    unc = gb.ls_uncertainty(gb.els(gb.Structure(["y(k-1)", "q(k-1)", "T(k-1)"]), rec).model, rec)
+    wider = gb.Record(np.column_stack([np.linspace(0, 1, len(rec)), rec.u]), rec.y, Ts=2.0,
+                      units=(("V", "", ""), "m"), input_names=("z", "q", "T"))
+    assert gb.simulation_band(unc, wider).units == (("V", "l/min", "°C"), "m")

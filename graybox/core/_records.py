@@ -794,15 +794,26 @@ def check_units_agree(items: Sequence[object], advice: str) -> None:
 
 def said_units(records: object, static: object = None) -> tuple[str | tuple[str, ...], str]:
     """The units a fit's records (a Record, a DaskRecord or a sequence of them) and static points say together:
-    per slot the first named (per input where the inputs have units of their own), as one record may name a unit
-    the others leave empty (where two name one they agree: :func:`check_compatible`)."""
-    said = [getattr(r, "units", ("", "")) for r in (records if isinstance(records, (list, tuple)) else [records])]
-    said += [static.units] if isinstance(static, StaticPoints) else []
+    per slot the first named, as one record may name a unit the others leave empty (where two name one they agree:
+    :func:`check_compatible`). Inputs in units of their own are merged input by input, by name (in the first item's
+    order: a model beside a record may use fewer of its inputs, or list them in another order)."""
+    items = list(records) if isinstance(records, (list, tuple)) else [records]
+    items += [static] if isinstance(static, StaticPoints) else []
+    said = [getattr(x, "units", ("", "")) for x in items]
     out = next((u[1] for u in said if u[1]), "")
-    per = [u[0] for u in said if not isinstance(u[0], str)]
-    if not per:
+    if all(isinstance(u[0], str) for u in said):
         return (next((u[0] for u in said if u[0]), ""), out)
-    each = [next((input_unit(u, j) for u in said if input_unit(u, j)), "") for j in range(len(per[0]))]
+    first = items[0]
+    names = list(getattr(first, "input_names", None) or ())
+    n = len(names) if names else len(next(u[0] for u in said if not isinstance(u[0], str)))
+
+    def unit_of(x: object, u: tuple, j: int) -> str:
+        own = list(getattr(x, "input_names", None) or ())
+        if names and own:  # by name; an input the item does not have: nothing said
+            return input_unit(u, own.index(names[j])) if names[j] in own else ""
+        return input_unit(u, j) if isinstance(u[0], str) or j < len(u[0]) else ""
+
+    each = [next((unit_of(x, u, j) for x, u in zip(items, said) if unit_of(x, u, j)), "") for j in range(n)]
     return check_units((each, out), "units")
 
 
