@@ -1112,12 +1112,9 @@ class _QP:
         the output's spread (the rows in units of σ, each over its norm): OSQP stopped early with loose tolerances
         returned a θ 60 % outside a static band, said only as "an inaccurate optimum"."""
         V, g, G, h = self.rows
-        miss = np.zeros(0)
-        if V.shape[0]:
-            miss = np.abs(V @ dy - g) / np.maximum(np.linalg.norm(V, axis=1), np.finfo(float).tiny)
-        if G.shape[0]:
-            miss = np.concatenate([miss, (G @ dy - h) / np.maximum(np.linalg.norm(G, axis=1), np.finfo(float).tiny)])
-        worst = float(np.max(miss, initial=0.0))
+        miss = np.concatenate([np.abs(V @ dy - g), G @ dy - h])  # an equality missed either way, an inequality above
+        norms = np.linalg.norm(np.vstack([V, G]), axis=1)
+        worst = float(np.max(miss / np.maximum(norms, np.finfo(float).tiny), initial=0.0))
         if not worst <= 1e-6:  # NaN too
             raise _member_failure(InfeasibleError(
                 f"solver {self.solver} reports an inaccurate optimum (status 'optimal_inaccurate') that misses the "
