@@ -122,6 +122,14 @@ def frame_names(x: object, names: Sequence[str] | None, name: str, *, column: bo
     return tuple(labels) if text else None
 
 
+def _named_levels(x: object, names: Sequence[str] | None, name: str) -> tuple[object, Sequence[str] | None, bool]:
+    """Static levels ``x`` as :func:`as_input_array` reads them (a dict's keys its names: :func:`points_by_name`), their
+    inputs' names, and whether those names are a frame's own columns (:func:`frame_names`), said so in messages."""
+    x, given = points_by_name(x, names, name)
+    named = frame_names(x, given, name, column=True)  # a frame's columns name its inputs, as a dict's keys do
+    return x, named, named is not given
+
+
 #: What an input name given by a DataFrame's column is called in messages.
 _COLUMNS_NAME = "the DataFrame's column names, its inputs' names (input_names= names them otherwise, read by position)"
 
@@ -520,10 +528,7 @@ class StaticPoints(Relocked):
 
     def __post_init__(self) -> None:
         check_str(self.name, "StaticPoints: name")
-        ubar, given = points_by_name(self.ubar, self.input_names, f"{self.name}: ubar")
-        # a frame's columns name its inputs, as a dict's keys do
-        named = frame_names(ubar, given, f"{self.name}: ubar", column=True)
-        own, given = named is not given, named
+        ubar, given, own = _named_levels(self.ubar, self.input_names, f"{self.name}: ubar")
         u = as_input_array(ubar, f"{self.name}: ubar", given, output=output_series(self.ybar), row="point")
         y = as_1d_finite(self.ybar, f"{self.name}: ybar")
         if u.shape[0] != y.shape[0]:
@@ -601,9 +606,7 @@ class StaticPoints(Relocked):
             there. (Their spread is the static uncertainty that D_SF's band B stands for.)
         """
         check_str(name, "StaticPoints: name")
-        ubar, input_names = points_by_name(ubar, input_names, f"{name}: ubar")
-        # a frame's columns name its inputs, as a dict's keys do
-        input_names = frame_names(ubar, input_names, f"{name}: ubar", column=True)
+        ubar, input_names, _ = _named_levels(ubar, input_names, f"{name}: ubar")
         u = as_input_array(ubar, f"{name}: ubar", input_names, output=output_series(ybar), row="point")
         y = as_1d_finite(ybar, f"{name}: ybar")
         if u.shape[0] != y.shape[0]:
@@ -803,17 +806,11 @@ def said_units(records: object, static: object = None) -> tuple[str | tuple[str,
     out = next((u[1] for u in said if u[1]), "")
     if all(isinstance(u[0], str) for u in said):
         return (next((u[0] for u in said if u[0]), ""), out)
-    first = items[0]
-    names = list(getattr(first, "input_names", None) or ())
+    names = list(getattr(items[0], "input_names", None) or ())
     n = len(names) if names else len(next(u[0] for u in said if not isinstance(u[0], str)))
-
-    def unit_of(x: object, u: tuple, j: int) -> str:
-        own = list(getattr(x, "input_names", None) or ())
-        if names and own:  # by name; an input the item does not have: nothing said
-            return input_unit(u, own.index(names[j])) if names[j] in own else ""
-        return input_unit(u, j) if isinstance(u[0], str) or j < len(u[0]) else ""
-
-    each = [next((unit_of(x, u, j) for x, u in zip(items, said) if unit_of(x, u, j)), "") for j in range(n)]
+    owns = [getattr(x, "input_names", None) for x in items]
+    each = [next((v for v in (_unit_of(u, own, names[j] if names else None, j) for u, own in zip(said, owns))
+                  if v), "") for j in range(n)]
     return check_units((each, out), "units")
 
 
@@ -827,6 +824,18 @@ def carried_from(records: object, static: object = None) -> dict:
             "units": said_units(records, static)}
 
 
+def _unit_of(units: tuple, own: Sequence[str] | None, name: str | None, j: int) -> str:
+    """The unit ``units`` (of the inputs ``own``) give one input of another side: the input called ``name`` where
+    both sides' names are known (``""`` where there is no such input), else the input at position ``j`` (``""``
+    past the last)."""
+    u = units[0]
+    if name is not None and own:
+        if name not in own:
+            return ""
+        j = list(own).index(name)
+    return u if isinstance(u, str) else (u[j] if j < len(u) else "")
+
+
 def _input_clash(units: tuple, names: Sequence[str] | None, theirs: tuple, their_names: Sequence[str] | None
                  ) -> tuple[str, str, str] | None:
     """(what, mine, theirs) of the first input unit two sides both name and name differently, or None: one unit
@@ -835,22 +844,13 @@ def _input_clash(units: tuple, names: Sequence[str] | None, theirs: tuple, their
     a, b = units[0], theirs[0]
     if isinstance(a, str) and isinstance(b, str):
         return ("input", a, b) if a and b and a != b else None
-
-    def of(u: str | tuple[str, ...], j: int) -> str:
-        return u if isinstance(u, str) else (u[j] if j < len(u) else "")
-
     n_a = len(a) if not isinstance(a, str) else len(names) if names is not None else len(b)
     known = names is not None and their_names is not None and len(names) == n_a
     for j in range(n_a):
-        if known:
-            if names[j] not in their_names:  # type: ignore[index, operator]
-                continue
-            k, what = list(their_names).index(names[j]), f"input {names[j]!r}"  # type: ignore[arg-type, index]
-        else:
-            k, what = j, f"input {j + 1}"
-        x, y = of(a, j), of(b, k)
+        name = names[j] if known else None  # type: ignore[index]
+        x, y = _unit_of(units, None, None, j), _unit_of(theirs, their_names, name, j)
         if x and y and x != y:
-            return (what, x, y)
+            return (f"input {name!r}" if known else f"input {j + 1}", x, y)
     return None
 
 
