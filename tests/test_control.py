@@ -553,6 +553,33 @@ def test_a_transient_input_is_computed_inside_the_nonlinear_system_from_its_sour
         ct.input_output_response(sysm, 0.5 * np.arange(5), np.vstack([[1000.0, 1e200, 0, 0, 0], np.zeros(5)]), x0)
 
 
+def test_a_local_models_python_control_systems_take_the_inputs_the_nonlinear_system_takes():
+    # to_statespace and to_transfer_function made a transient input u_tau2 a system input of its own, as narx_iosystem
+    # did before 0f19ff64: a loop whose controller sets u left it unconnected (python-control's 'Unused input(s)'
+    # warning), and the linear plant disagreed with control.linearize of narx_iosystem's, which takes u alone. z is
+    # (1 − ρ)(Δu(k) − Δu(k−1))² filtered: zero to first order in Δu, so the linear system from u is B_u / A alone
+    model = Model(["1", "y(k-1)", "u(k-1)", "u_tau2(k-1)", "u_tau2(k-1)y(k-1)", "u(k-2)u_tau2(k-1)"],
+                  [0.1, 0.5, 0.3, 0.5, 0.1, 0.2], input_names=("u", "u_tau2"), Ts=0.5, name="tr")
+    lm = gb.local_model(model, 1.0)
+    assert lm.input_names == ("u", "u_tau2")  # the linearisation's coefficients keep every input's row
+    nl = gb.narx_iosystem(model)
+    ss, tf = lm.to_statespace(), lm.to_transfer_function()
+    assert ss.input_labels == tf.input_labels == nl.input_labels == ["u"]
+    # B_u / A by hand: b_u = (0.3, 0), a = 0.5 + 0.1 z̄ = 0.5 at z̄ = 0
+    w = np.array([0.1, 1.0, 2 * np.pi])
+    z = np.exp(1j * w * 0.5)
+    by_hand = 0.3 / (z - 0.5)
+    np.testing.assert_allclose(np.squeeze(ct.frequency_response(ss, w).complex), by_hand, rtol=1e-12)
+    np.testing.assert_allclose(np.squeeze(ct.frequency_response(tf, w).complex), by_hand, rtol=1e-12)
+    lin = ct.linearize(nl, gb.narx_steady_state(model, 1.0, lm.ybar), [1.0], copy_names=True)
+    assert lin.input_labels == ss.input_labels
+    np.testing.assert_allclose(np.squeeze(ct.frequency_response(lin, w).complex), by_hand, rtol=1e-5)
+    # a loop whose controller sets u leaves no input unconnected (warnings are errors here)
+    C = ct.tf([0.5], [1, -1], dt=0.5, inputs="e", outputs="u", name="C")
+    loop = ct.interconnect([ss, C, ct.summing_junction(inputs=["r", "-y"], output="e")], inputs="r", outputs="y")
+    assert loop.input_labels == ["r"]
+
+
 def test_a_transient_input_decays_per_step_as_in_the_records_when_ts_relabels_a_one_second_model():
     # a model fitted on a record made without Ts= (1 s) has u_tau3 computed with ρ = exp(−1/3) per step; given the
     # real period, narx_iosystem(model, Ts=0.05) computed it with exp(−0.05/3) and ran 3924 off Model.simulate

@@ -32,8 +32,8 @@ import numpy as np
 from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, as_records, check_period,
                               check_same_units, check_units, frame_inputs, labelled_point, outside_range,
                               rounded_levels, static_point_inputs)
-from ..core._terms import Structure, check_input_names, require_inputs
-from ..core._transient import refuse_transient_levels, steady_levels
+from ..core._terms import Structure, check_input_names, require_inputs, transient_source
+from ..core._transient import _tau_of, refuse_transient_levels, steady_levels
 from ..core._reprs import exact_text, listed
 from ..core._validation import (Relocked, check_count, check_band_finite, check_band_values, check_choice, check_fields,
                                 check_int, check_per_point, check_real, check_seed, frozen, real_array, warn)
@@ -48,7 +48,7 @@ from ..static._equilibrium_kernels import unit_pole
 
 __all__ = ["LocalModel", "OperatingCurve", "local_model", "operating_curve", "jacobian_rows", "check_polynomial",
            "require_control", "local_statespace", "local_transfer_function", "system_name", "CONTROL_EXTRA",
-           "input_levels"]
+           "input_levels", "transient_sources"]
 
 #: The status of a point where the model has several stable equilibria and no ``y0`` picks one: ū sets no ȳ there.
 SEVERAL_STABLE = "several stable equilibria"
@@ -464,13 +464,16 @@ class LocalModel(Relocked):
         Observer canonical form of order n = max(L_y, L_u): x_1 = Δy, A's first column holds the
         a_l, B's rows the b_il, C = [1, 0, …], D = 0. Its eigenvalues are :attr:`poles` and
         n − L_y poles at z = 0 (input lags beyond the output lags). Inputs are named after
-        ``input_names``, the output ``"y"``. Needs python-control (``pip install graybox[control]``).
+        ``input_names`` but the transient inputs (``u_tau30`` …: moving with Δu², they stay at 0 to first order,
+        and :func:`graybox.narx_iosystem` computes them), the output ``"y"``. Needs python-control
+        (``pip install graybox[control]``).
         """
         self._need()
         return local_statespace(self)
 
     def to_transfer_function(self) -> Any:
-        """The local model as a discrete ``control.TransferFunction`` (dt = Ts), one column per input.
+        """The local model as a discrete ``control.TransferFunction`` (dt = Ts), one column per input (but the
+        transient inputs, as in :meth:`to_statespace`).
 
         G_i(z) = Σ_l b_il z^(n−l) / (z^n − Σ_l a_l z^(n−l)), n = max(L_y, L_u), in deviation
         variables. Needs python-control (``pip install graybox[control]``).
@@ -516,36 +519,54 @@ def require_control() -> Any:
     return control
 
 
-def _padded(lm: LocalModel) -> tuple[np.ndarray, np.ndarray, int]:
-    """(a, b) padded to the common order n = max(L_y, L_u): a (n,), b (m, n)."""
+def transient_sources(inputs: tuple[str, ...]) -> dict[int, tuple[int, float]]:
+    """Transient input j → (its source input i, τ (s)), read from their names as
+    :func:`graybox.core._transient.recomputed_transients` reads them: the inputs no python-control system takes
+    (:func:`graybox.narx_iosystem` computes them from their sources)."""
+    out = {}
+    for j, n in enumerate(inputs):
+        source = transient_source(n, inputs)
+        tau = None if source is None else _tau_of(n, source)
+        if tau is not None:
+            out[j] = (inputs.index(source), tau)
+    return out
+
+
+def _padded(lm: LocalModel) -> tuple[np.ndarray, np.ndarray, int, list[str]]:
+    """(a, b, n, names) padded to the common order n = max(L_y, L_u): a (n,), b (m', n) of the inputs a system
+    takes, named ``names``. A transient input is none: z(k) = ρ z(k−1) + (1 − ρ)(u(k) − u(k−1))² moves with Δu
+    squared, so to first order it stays at its z̄ = 0 and the linear system from u is B_u / A alone (as
+    ``control.linearize`` of :func:`graybox.narx_iosystem`'s system, which computes z, finds it)."""
+    transient = transient_sources(lm.input_names)
+    fed = [i for i in range(len(lm.input_names)) if i not in transient]
     n = max(lm.a.size, lm.b.shape[1], 1)
     a = np.zeros(n)
     a[: lm.a.size] = lm.a
-    b = np.zeros((lm.b.shape[0], n))
-    b[:, : lm.b.shape[1]] = lm.b
-    return a, b, n
+    b = np.zeros((len(fed), n))
+    b[:, : lm.b.shape[1]] = lm.b[fed]
+    return a, b, n, [lm.input_names[i] for i in fed]
 
 
 def local_statespace(lm: LocalModel) -> Any:
     """See :meth:`graybox.control._local.LocalModel.to_statespace`."""
     ct = require_control()
-    a, b, n = _padded(lm)
+    a, b, n, names = _padded(lm)
     A = np.zeros((n, n))
     A[:, 0] = a
     A[np.arange(n - 1), np.arange(1, n)] = 1.0
     C = np.zeros((1, n))
     C[0, 0] = 1.0
-    return ct.ss(A, b.T, C, np.zeros((1, b.shape[0])), dt=lm.Ts, inputs=list(lm.input_names), outputs=["y"],
+    return ct.ss(A, b.T, C, np.zeros((1, b.shape[0])), dt=lm.Ts, inputs=names, outputs=["y"],
                  states=[f"x{i + 1}" for i in range(n)], name=system_name(lm.name, "local"))
 
 
 def local_transfer_function(lm: LocalModel) -> Any:
     """See :meth:`graybox.control._local.LocalModel.to_transfer_function`."""
     ct = require_control()
-    a, b, n = _padded(lm)
+    a, b, n, names = _padded(lm)
     den = np.concatenate([[1.0], -a])
     nums = [[np.trim_zeros(np.concatenate([[0.0], row]), "f") if np.any(row) else np.array([0.0]) for row in b]]
-    return ct.tf(nums, [[den] * b.shape[0]], dt=lm.Ts, inputs=list(lm.input_names), outputs=["y"],
+    return ct.tf(nums, [[den] * b.shape[0]], dt=lm.Ts, inputs=names, outputs=["y"],
                  name=system_name(lm.name, "local"))
 
 

@@ -34,11 +34,11 @@ import numpy as np
 
 from ..core._records import Record, check_period, frame_inputs, require_record
 from ..core._simulation import DivergenceError
-from ..core._terms import Structure, require_inputs, transient_source
-from ..core._transient import _tau_of, refuse_transient_levels, steady_levels
+from ..core._terms import Structure, require_inputs
+from ..core._transient import refuse_transient_levels, steady_levels
 from ..core._validation import check_bool, check_int, check_real, check_str
 from ..models._model import Model
-from ._local import check_Ts, check_polynomial, input_levels, require_control, system_name
+from ._local import check_Ts, check_polynomial, input_levels, require_control, system_name, transient_sources
 
 __all__ = ["narx_iosystem", "narx_initial_state", "narx_state_names", "narx_steady_state"]
 
@@ -56,22 +56,10 @@ class _Layout:
     transient: tuple[tuple[int, int, float], ...]  # (transient input j, its source input i, τ in s), computed
 
 
-def _transients(inputs: tuple[str, ...]) -> dict[int, tuple[int, float]]:
-    """Transient input j → (its source input i, τ (s)), read from their names as
-    :func:`graybox.core._transient.recomputed_transients` reads them."""
-    out = {}
-    for j, n in enumerate(inputs):
-        source = transient_source(n, inputs)
-        tau = None if source is None else _tau_of(n, source)
-        if tau is not None:
-            out[j] = (inputs.index(source), tau)
-    return out
-
-
 @lru_cache(maxsize=256)
 def _layout(structure: Structure, inputs: tuple[str, ...]) -> _Layout:
     Ly = max((l for t in structure for s, l, _ in t.factors if s == "y"), default=0)
-    transient = _transients(inputs)
+    transient = transient_sources(inputs)
     lags = [structure.input_lag(n) for n in inputs]
     # a transient input the structure uses is computed: z(k) needs u(k−1), which the state holds even where F does
     # not use it; one it does not use is neither fed nor held
