@@ -282,6 +282,27 @@ def test_operating_curve_band_from_the_parameter_covariance():
 
 
 # -- bad input -----------------------------------------------------------------------------------------
+@pytest.mark.parametrize("terms,theta", [
+    (["y(k-1)", "y(k-2)", "u(k-1)"], [1.0, -1.0, 0.1]),  # z² − z + 1: e^{±iπ/3}
+    (["y(k-1)", "y(k-2)", "u(k-1)"], [2 * np.cos(0.3), -1.0, 0.1]),  # z² − 2cos(0.3) z + 1: e^{±0.3i}
+    (["y(k-5)", "u(k-1)"], [-1.0, 0.1]),  # z⁵ + 1: the fifth roots of −1
+    (["y(k-1)", "y(k-2)", "y(k-3)", "u(k-1)"], [-1.0, -1.0, -1.0, 0.1]),  # (z + 1)(z² + 1): −1 and ±i
+])
+def test_poles_on_the_unit_circle_never_decay_whatever_rounding_made_of_their_modulus(terms, theta):
+    # every pole has modulus 1 (the polynomial's roots by hand), the one stability test says not stable, yet the
+    # eigensolver's moduli came out 1 − 1e-16 for some: τ = −Ts / ln|p| was 9.0e15 s (a number for a mode that never
+    # decays) and ζ 1e-16, or ζ NaN ("outside the circle") where they came out 1 + 2e-16; the dominant pole's modulus
+    # was also taken by Python's abs where spectral_radius takes numpy's (1.0 beside τ = 9.0e15 s)
+    model = Model(terms, theta, Ts=0.5)
+    lm = gb.local_model(model, 1.0)
+    assert lm.exists and not lm.stable
+    np.testing.assert_allclose(np.abs(lm.poles), 1.0, rtol=1e-12)
+    assert lm.time_constant == np.inf and lm.damping == 0.0 and lm.settling_time() == np.inf
+    assert abs(lm.dominant_pole) == pytest.approx(1.0, rel=1e-12)
+    oc = gb.operating_curve(model, [1.0])
+    assert oc.time_constant[0] == np.inf and oc.damping[0] == 0.0
+
+
 def test_operating_point_outside_the_data_warns():
     data = gb.load_pumping()
     with pytest.warns(gb.StaticRangeWarning, match="2000") as record:

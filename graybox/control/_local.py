@@ -145,21 +145,30 @@ def _unit_pole(a: np.ndarray) -> bool:
     return bool(unit_pole(kernel_array(a)))
 
 
-def _dominant(poles: np.ndarray, Ts: float, unit: bool = False) -> tuple[complex, float, float]:
+#: Relative rounding of pole moduli from the eigensolver: moduli within it of one another are one modulus, and within
+#: it of 1 on the unit circle (z⁵ + 1's roots come out 1 − 6e-16 … 1 + 4e-16).
+MODULUS_ROUNDING = 1e-12
+
+
+def _dominant(poles: np.ndarray, Ts: float, unit: bool = False, stable: bool = True) -> tuple[complex, float, float]:
     """(dominant pole, its time constant (s), its damping) of one set of poles (``unit``: one is z = 1 to rounding,
-    :func:`_unit_pole`; the slowest mode then never decays)."""
+    :func:`_unit_pole`; the slowest mode then never decays; ``stable``: the one stability test's verdict, False when
+    a mode never decays though rounding put every modulus below 1)."""
     if poles.size == 0 or not np.any(poles):
         return 0j, 0.0, 1.0  # a finite impulse response: no recursion, nothing to wait for
     if unit and np.abs(poles).max() <= 1.0:
         return 1 + 0j, float("inf"), 0.0
     mods = np.abs(poles)
-    cand = poles[mods >= mods.max() * (1 - 1e-12)]
+    rho = float(mods.max())  # the spectral radius, as LocalModel.spectral_radius and the bands take it
+    cand = poles[mods >= rho * (1 - MODULUS_ROUNDING)]
     # of poles of one modulus the least damped, whatever order the eigensolver gave them in: of a conjugate
     # pair the one with arg > 0, of ±p (a model in y(k-2) alone) −p, whose mode alternates as slowly as +p's decays
     p = complex(cand[np.argmax(np.angle(cand))])
-    r = abs(p)
-    if r >= 1.0:
-        return p, float("inf"), float("nan") if r > 1.0 else 0.0
+    r = rho  # not abs(p): Python's modulus of a pole on the unit circle came out 1 − 1e-16 where numpy's is 1
+    if r >= 1.0 or not stable:
+        # on the unit circle to rounding (the test says not inside; z² − z + 1's roots came out of modulus 1 − 1e-16,
+        # a τ of 9e15 s) its mode never decays, ζ = 0; outside it grows, ζ undefined
+        return p, float("inf"), 0.0 if r <= 1.0 + MODULUS_ROUNDING else float("nan")
     s = complex(np.log(r), np.angle(p))
     return p, float(-Ts / np.log(r)), float(-s.real / abs(s))
 
@@ -267,10 +276,11 @@ class LocalModel(Relocked):
         object.__setattr__(self, "Ts", check_real(self.Ts, "Ts (seconds)", low=0, low_open=True))
         if self.ybar is not None and a.size:  # τ = −Ts / ln ρ is a figure too: a period that overflows it is none
             poles = characteristic_roots(a[None, :])[0]
+            stable = bool(schur_stable(a))  # a mode that never decays has τ = inf of its own, whatever Ts
             with np.errstate(over="ignore", divide="ignore"):
-                _, tau, _ = _dominant(poles, self.Ts)
+                _, tau, _ = _dominant(poles, self.Ts, stable=stable)
             rho = float(np.abs(poles).max())
-            if rho < 1.0 and not np.isfinite(tau):
+            if stable and rho < 1.0 and not np.isfinite(tau):
                 raise ValueError(f"Ts = {self.Ts:g} s makes the time constant −Ts / ln ρ (ρ = {rho:.6g}) overflow")
         object.__setattr__(self, "ubar", frozen(ubar))
         object.__setattr__(self, "a", frozen(a))
@@ -352,11 +362,12 @@ class LocalModel(Relocked):
     def dominant_pole(self) -> complex:
         """The pole of largest modulus (of several of that modulus the least damped: of a complex pair the one
         with positive angle, of ±p the negative one)."""
-        return _dominant(self.poles, self.Ts, _unit_pole(self.a))[0]
+        return self._mode()[0]
 
     @property
     def time_constant(self) -> float:
-        """−Ts / ln|p| of the dominant pole (s); 0 without recursion; inf when |p| >= 1 (nothing settles).
+        """−Ts / ln|p| of the dominant pole (s); 0 without recursion; inf when |p| >= 1 or the equilibrium is not
+        :attr:`stable` (nothing settles: a pole on the unit circle whose modulus rounding put at 1 − 1e-16 included).
 
         The decay of the slowest mode's envelope, a first-order time constant only for a positive
         real dominant pole (:attr:`damping` 1). A negative or complex one oscillates, and a pole
@@ -364,13 +375,18 @@ class LocalModel(Relocked):
         model can carry a pole near −1 with a zero beside it, a τ longer than the time its step
         takes to settle. Read :meth:`settling_time` and :meth:`step` before tuning on it.
         """
-        return _dominant(self.poles, self.Ts, _unit_pole(self.a))[1]
+        return self._mode()[1]
 
     @property
     def damping(self) -> float:
         """ζ of the dominant pole's continuous equivalent s = ln(p)/Ts (1 for a positive real pole,
-        below 1 for a complex or negative one; 0 on the unit circle, NaN outside it)."""
-        return _dominant(self.poles, self.Ts, _unit_pole(self.a))[2]
+        below 1 for a complex or negative one; 0 on the unit circle (to a modulus rounding of 1e-12, where the
+        equilibrium is not :attr:`stable`), NaN outside it)."""
+        return self._mode()[2]
+
+    def _mode(self) -> tuple[complex, float, float]:
+        """(dominant pole, τ (s), ζ): :func:`_dominant` of the poles, told the stability test's verdict."""
+        return _dominant(self.poles, self.Ts, _unit_pole(self.a), self.stable)
 
     def step(self, n_samples: int, input: int | str = 0) -> np.ndarray:
         """Response Δy(k), k = 0 … n−1, to a unit step of input ``input`` applied from k = 0, shape (n,).
@@ -1002,7 +1018,7 @@ def _summary(lm: LocalModel, settling: bool = True) -> tuple[float, np.ndarray, 
     m = len(lm.input_names)
     if not lm.exists:
         return np.nan, np.full(m, np.nan), np.nan, np.nan, np.nan, np.nan
-    _, tau, zeta = _dominant(lm.poles, lm.Ts, _unit_pole(lm.a))
+    _, tau, zeta = lm._mode()
     return float(lm.ybar), lm.dc_gain, tau, zeta, lm.spectral_radius, lm.settling_time(0) if settling else np.nan
 
 
