@@ -12,6 +12,7 @@ from hypothesis import assume, given, settings, strategies as st
 
 import graybox as gb
 from graybox import Model, reference
+from graybox.control import _local as local_module
 from graybox.control._local import jacobian_rows
 from graybox.datasets.pumping import PumpingPlant
 from graybox.static._analysis import _linear_coefficients
@@ -301,6 +302,19 @@ def test_poles_on_the_unit_circle_never_decay_whatever_rounding_made_of_their_mo
     assert abs(lm.dominant_pole) == pytest.approx(1.0, rel=1e-12)
     oc = gb.operating_curve(model, [1.0])
     assert oc.time_constant[0] == np.inf and oc.damping[0] == 0.0
+
+
+def test_the_settling_time_of_an_equilibrium_that_is_not_stable_runs_no_step_response(monkeypatch):
+    # z² − 2cos(0.3)z + 1: its roots' moduli came out 1 − 1e-16, and settling_time ran its step response over the
+    # longest window (4e7 samples, 3 s, in operating_curve once per such point) before saying inf
+    lm = gb.local_model(Model(["y(k-1)", "y(k-2)", "u(k-1)"], [2 * np.cos(0.3), -1.0, 0.1], Ts=0.5), 1.0)
+    assert lm.spectral_radius < 1.0 and not lm.stable  # as rounding made them: the test below needs both
+
+    def no_run(*args, **kwargs):
+        raise AssertionError("a step response was run")
+
+    monkeypatch.setattr(local_module, "_step_error", no_run)
+    assert lm.settling_time() == np.inf
 
 
 def test_operating_point_outside_the_data_warns():

@@ -448,7 +448,9 @@ class LocalModel(Relocked):
         i = self._input_index(input)
         g = float(self.dc_gain[i])
         rho = self.spectral_radius
-        if rho >= 1.0 or not np.isfinite(g) or _unit_pole(self.a):
+        # not stable (the one test): a mode never decays, even where rounding put its modulus at 1 − 1e-16 (its step
+        # response was run over the longest window, 3 s, to find that out)
+        if rho >= 1.0 or not np.isfinite(g) or not self.stable:
             return float("inf")
         if g == 0.0:
             return float("nan")
