@@ -317,6 +317,22 @@ def test_the_settling_time_of_an_equilibrium_that_is_not_stable_runs_no_step_res
     assert lm.settling_time() == np.inf
 
 
+@pytest.mark.parametrize("ubar,y0", [(0.7, 1e4), (1.4, 100.0), (2.3, 1e6)])
+def test_a_continuum_of_equilibria_linearises_with_its_pole_at_one_whatever_rounding_made_of_its_coefficients(ubar, y0):
+    # y(k) = y(k-1) + (0.1 u(k-1) − c) y(k-1)² with c = 0.1 ū: at ū every ȳ is an equilibrium (the continuum the
+    # status names), so 1 − Σa = −∂(F − ȳ)/∂ȳ = 0 there, by hand. Rounding left 0.1·0.7 − 0.07 = −7e-18 and the
+    # linearisation at y0 = 1e4 had Σa = 1 − 2e-13: stable, τ = 4.4e12 s, gain 4.4e19, under the status that says the
+    # output stays where it starts
+    model = Model(["y(k-1)", "y(k-1)^2u(k-1)", "y(k-1)^2"], [1.0, 0.1, -round(0.1 * ubar, 6)], Ts=1.0)
+    lm = gb.local_model(model, ubar, y0=y0)
+    assert lm.status == "continuum of equilibria" and lm.ybar == y0
+    assert lm.a.sum() == 1.0 and not lm.stable and lm.spectral_radius == 1.0
+    assert lm.time_constant == np.inf and lm.damping == 0.0 and lm.settling_time() == np.inf
+    assert np.all(np.isinf(lm.dc_gain))
+    oc = gb.operating_curve(model, [ubar], y0=[y0])
+    assert oc.time_constant[0] == np.inf and np.isinf(oc.gain[0])
+
+
 def test_operating_point_outside_the_data_warns():
     data = gb.load_pumping()
     with pytest.warns(gb.StaticRangeWarning, match="2000") as record:

@@ -648,8 +648,8 @@ def _fold_at(model: Model, u: np.ndarray, ybar: float) -> bool:
 def _equilibrium(model: Model, u: np.ndarray, y0: float | None, eqs: list[Equilibrium] | None = None
                  ) -> tuple[float | None, str, str, bool]:
     """(ȳ, status, reason, fold) at one point u (m,): the reached equilibrium, else the one to linearise around;
-    ``fold``: that equilibrium is a multiple root of the static equation (its pole is at z = 1). ``eqs``: the
-    model's equilibria at u, when the caller found them (:func:`_equilibria_at`)."""
+    ``fold``: that equilibrium is a multiple root of the static equation, or every ȳ is one (its pole is at z = 1).
+    ``eqs``: the model's equilibria at u, when the caller found them (:func:`_equilibria_at`)."""
     label = exact_text(u[0]) if u.size == 1 else "(" + ", ".join(exact_text(v) for v in u) + ")"
     if _continuum_at(model, u):
         # every ȳ is an equilibrium: ū sets none, the output stays where it starts; y0 is then the one to take
@@ -657,7 +657,9 @@ def _equilibrium(model: Model, u: np.ndarray, y0: float | None, eqs: list[Equili
         if y0 is None:
             return None, "continuum of equilibria", why + ("; give y0 (the output level ȳ to linearise at, where the "
                                                            "model stays) for the local model there"), False
-        return float(y0), "continuum of equilibria", why + f"; linearised at ȳ = y0 = {exact_text(y0)}", False
+        # every ȳ solves the static equation, so its slope 1 − Σ a_l is 0 there: the pole is at z = 1 (True: as at a
+        # fold), whatever rounding left of the vanishing coefficients (Σa = 1 − 2e-13 at y0 = 1e4 was stable, τ 4e12 s)
+        return float(y0), "continuum of equilibria", why + f"; linearised at ȳ = y0 = {exact_text(y0)}", True
     if eqs is None:
         eqs = model.equilibria(u if model.n_inputs > 1 else float(u[0]))
     if y0 is None:
@@ -788,7 +790,7 @@ def _linearise(model: Model, u: np.ndarray, y0: float | None, Ts: float,
         if fold and a.size:
             # a multiple root (a fold, an inflection): there Σ a_l = 1 exactly, but the root is known only to
             # eps^(1/m) and its a_l sum to 1 ± 4e-10 (a triple root), either side of 1 as rounding went: the
-            # linearisation at the root itself has its pole at z = 1
+            # linearisation at the root itself has its pole at z = 1 (so has a continuum's, every ȳ a root)
             a = a.copy()
             a[0] += 1.0 - a.sum()
     return LocalModel(u, ybar, status, reason, a, b, Ts, model.input_names, model.name, model.units)
