@@ -40,7 +40,8 @@ from ..core._validation import (Relocked, check_count, check_band_finite, check_
 from ..models._coerce import as_model
 from ..models._model import Model
 from ..static._analysis import (CONTINUUM_WHY, NO_EQUILIBRIUM_WHY, REACHED, Equilibrium, Reached, continuum,
-                                equilibria_at_levels, multiple_root, reached_equilibria, schur_stable, several_stable)
+                                equilibria_at_levels, multiple_root, reached_equilibria, schur_stable, several_stable,
+                                verdict_radius)
 from ..static._linearisation import characteristic_roots, local_coefficients
 from ..static._surface_analysis import _folded, reached_surface
 from ..core._simulation_kernels import kernel_array
@@ -316,10 +317,13 @@ class LocalModel(Relocked):
 
     @property
     def spectral_radius(self) -> float:
-        """Largest pole modulus (0 without output lags)."""
+        """Largest pole modulus (0 without output lags), on the side of the unit circle :attr:`stable` says (at least 1
+        where not stable), as :attr:`graybox.Equilibrium.spectral_radius` reports it."""
         p = self.poles
         rho = float(np.abs(p).max()) if p.size else 0.0
-        return max(rho, 1.0) if _unit_pole(self.a) else rho  # z = 1 to rounding: a fold's pole
+        # on the stability verdict's side of the unit circle, as the static analysis's Equilibrium reports it: a pole at
+        # z = 1 to rounding (a fold's), or z² − 2cos(0.3)z + 1's pair whose moduli rounding put at 1 − 1e-16, is ρ >= 1
+        return verdict_radius(self.stable, rho)
 
     def zeros(self, input: int | str = 0) -> np.ndarray:
         """Zeros of B_i away from z = 0: roots of Σ_l b_il z^(L_u − l) other than 0, complex (input ``input``).
