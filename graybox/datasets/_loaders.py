@@ -449,7 +449,7 @@ def _unbracket(cell: str) -> str:
 
 #: The units of elapsed time a units row or the time column's name may give a time column of numbers: (multiply,
 #: divide) that make them seconds (a division by 1000 rounds 1010 ms to the float nearest 1.01 s, where a product with
-#: 1e-3 rounds twice). Every unit of :data:`_OTHER_UNITS` is here.
+#: 1e-3 rounds twice). A name's units (:data:`_OTHER_UNITS`) are this table's.
 _TIME_UNITS = {**dict.fromkeys(("", "s", "sec", "secs", "second", "seconds"), (1, 1)),
                **dict.fromkeys(("ms", "msec", "millis", "millisecond", "milliseconds"), (1, 1000)),
                **dict.fromkeys(("us", "µs", "μs", "usec", "micros", "microsecond", "microseconds"), (1, 10**6)),
@@ -1304,8 +1304,9 @@ _TICK_POWER = (r"(?:e[-+−]?\d+|(?:\s*[·*×x]\s*10)?\s*(?:\^|\*\*)\s*[-+−]?\
                r"|(?:\s*[·*×x]\s*10)?\s*[⁻⁺]?[⁰¹²³⁴⁵⁶⁷⁸⁹]+)")
 _TICK_FRACTION = r"(?:\s*/\s*" + _TICK_NUMBER + _TICK_POWER + "?)"
 #: the units other than seconds a name may give, bare ("t [h]") or with a tick's number ("t [2h]")
-_OTHER_UNITS = (r"ms|msec|millis(?:econds?)?|us|µs|μs|usec|micros(?:econds?)?|ns|min|mins|minutes?|h|hr|hrs|hours?|d|"
-                r"days?")
+#: (:data:`_TIME_UNITS`' own, not a list of its own: the table's nsec and nanoseconds, missing here, read as seconds)
+_OTHER_UNITS = "|".join(re.escape(k) for k in sorted((k for k, v in _TIME_UNITS.items() if v != (1, 1)), key=len,
+                                                     reverse=True))
 _TICK_UNIT = rf"(?:s|secs?|seconds?|{_OTHER_UNITS})"
 _TIME_UNIT = re.compile(rf"(?:[\[(]\s*|[_/ -])({_OTHER_UNITS})\s*[\])]?\s*$"
                         # a tick of a PLC or logger: "Zeit [10ms]", "t (0.1 s)", "t [1/10 s]", "t [1e-3 s]", "t [10^-3 s]",
