@@ -1638,12 +1638,22 @@ def _scaled_nanstd(D: np.ndarray) -> np.ndarray:
 
 
 def _refuse_overflow(ub: np.ndarray, yb: np.ndarray, hy: np.ndarray, gain: np.ndarray, hg: np.ndarray,
-                     drawn: bool) -> None:
+                     drawn: bool, gradients: tuple[np.ndarray, np.ndarray] | None = None) -> None:
     """``ValueError`` naming the first level ``ub`` (M,) or point (M, m) where the band of ȳ (``yb`` ± ``hy``, its
     half width or spread) or of a gain (``gain`` ± ``hg``) leaves the float range: said as that, not as a band whose
-    ends are not finite numbers. ``drawn`` (Monte Carlo): a NaN spread is no draw kept there, no overflow; the
-    delta method's NaN is a gradient beyond the float range (∞ − ∞ in its contraction)."""
+    ends are not finite numbers. ``drawn`` (Monte Carlo): a NaN spread is no draw kept there, no overflow.
+    ``gradients``: the delta method's of ȳ (M, n) and of the gains (M, …, n); where one leaves the float range (its
+    spread then NaN or inf) that is said, not the band, which may well be floats there (ȳ = 1.785e308 ± 4e305 at
+    ū = 1e308, ∂ȳ/∂a = 3.2e308), and Monte Carlo offered, which needs no gradient."""
     M = len(yb)
+    if gradients is not None:
+        lost = {k: ~np.isfinite(np.asarray(G).reshape(M, -1)).all(axis=1) for k, G in zip(("ȳ", "its gain"), gradients)}
+        if (lost["ȳ"] | lost["its gain"]).any():
+            i = int(np.flatnonzero(lost["ȳ"] | lost["its gain"])[0])
+            what = "ȳ" if lost["ȳ"][i] else "its gain"  # the gain's follows from ȳ's: the first said alone
+            raise ValueError(f"the delta method's gradient of {what} leaves the float range (±1.8e308) at "
+                             f"ū = {point_texts(np.asarray(ub))[i]} (ȳ = {yb[i]:g}): method='monte-carlo' draws the "
+                             "band without it; or give levels where the static map's gradient is a float")
     with np.errstate(over="ignore", invalid="ignore"):
         ends = {"ȳ": (np.column_stack([yb + hy, yb - hy]), hy.reshape(M, -1)),
                 "its gain": (np.column_stack([(gain + hg).reshape(M, -1), (gain - hg).reshape(M, -1)]),
@@ -1654,11 +1664,10 @@ def _refuse_overflow(ub: np.ndarray, yb: np.ndarray, hy: np.ndarray, gain: np.nd
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
         what = " and ".join(f"the band of {k}" for k in over if over[k][i])
-        how = "" if drawn else " (method='monte-carlo' draws it without the delta method's gradient)"
         leave = "leave" if " and " in what else "leaves"
         at = point_texts(np.asarray(ub))[i]
         raise ValueError(f"the band overflows at ū = {at} (ȳ = {yb[i]:g}): {what} {leave} "
-                         f"the float range (±1.8e308){how}; give levels where the static map and its band are floats")
+                         "the float range (±1.8e308); give levels where the static map and its band are floats")
 
 
 def _own(y: np.ndarray, g: np.ndarray, y_est: np.ndarray, g_est: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -1800,7 +1809,7 @@ def static_curve_band(
         Gy = static_theta_gradient_of(p, A, th, uc, yb)
         Gg = static_gain_gradient(p, A, th, uc, yb, Gy)[:, 0, :]
         sy, sg = uncertainty.std_of(Gy), uncertainty.std_of(Gg)
-        _refuse_overflow(ub, yb, z * sy, gain, z * sg, drawn=False)
+        _refuse_overflow(ub, yb, z * sy, gain, z * sg, drawn=False, gradients=(Gy, Gg))
         return StaticCurveBand(ub, yb, yb - z * sy, yb + z * sy, sy, gain, gain - z * sg, gain + z * sg, sg,
                                uncertainty.level, "delta", 0, np.zeros(ub.size), m.name, m.units)
     rng = np.random.default_rng(seed)
@@ -1888,7 +1897,7 @@ def static_surface_band(
         Gg = static_gain_gradient(p, A, th, ub, yb, dy)  # (M, m, n)
         sy = uncertainty.std_of(dy)
         sg = uncertainty.std_of(Gg.reshape(-1, th.size)).reshape(gain.shape)
-        _refuse_overflow(ub, yb, z * sy, gain, z * sg, drawn=False)
+        _refuse_overflow(ub, yb, z * sy, gain, z * sg, drawn=False, gradients=(dy, Gg))
         return StaticSurfaceBand(ub, names, yb, yb - z * sy, yb + z * sy, sy, gain, gain - z * sg, gain + z * sg, sg,
                                  uncertainty.level, "delta", 0, np.zeros(ub.shape[0]), m.name, m.units)
     rng = np.random.default_rng(seed)
