@@ -376,7 +376,15 @@ class ResidualTests(Relocked):
                        + (f", those left out {list(self.undefined)}" if self.undefined else ""))
 
     def to_frame(self) -> pd.DataFrame:
-        """One row per test: label, kind, passed, max |φ|, worst lag, lags outside the band."""
+        """The tests as a table.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per test (indexed by its name): ``test`` (its label), ``kind``, ``passed``, ``max |phi|``,
+            ``worst lag``, ``limit``, ``band`` (dimensionless correlations) and ``lags outside band``; a test not
+            made on these data has ``passed`` None and ``undefined`` (why).
+        """
         import pandas as pd
 
         rows = {

@@ -118,7 +118,14 @@ class SimulationBand(Relocked):
         return float(np.mean((self.y[k] >= self.low[k]) & (self.y[k] <= self.high[k])))
 
     def to_frame(self) -> pd.DataFrame:
-        """One row per sample: measured y, the free run ŷ, the band and the std, indexed by time (s)."""
+        """The band as a table.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per sample (index ``t``, s): ``y`` (measured), ``yhat`` (the free run), ``low``, ``high`` and
+            ``std``, output units.
+        """
         import pandas as pd
 
         return pd.DataFrame({"y": self.y, "yhat": self.yhat, "low": self.low, "high": self.high, "std": self.std},

@@ -245,18 +245,40 @@ class ParameterUncertainty(Relocked):
             object.__setattr__(self, "cov_factor", frozen(_canonical_factor(F, self.model.structure, A)))
 
     def contract(self, G: np.ndarray) -> np.ndarray:
-        """The variances gᵀ cov g of the linear functions g of θ in the rows of ``G`` (shape (M, n_terms)),
-        shape (M,): ‖F g‖² through :attr:`cov_factor` where there is one (accurate to eps × cond of the
-        estimate's scaled problem, where contracting ``cov`` is accurate to eps × cond²)."""
+        """The variances gᵀ cov g of the linear functions g of θ in the rows of ``G``: ‖F g‖² through
+        :attr:`cov_factor` where there is one (accurate to eps × cond of the estimate's scaled problem, where
+        contracting ``cov`` is accurate to eps × cond²).
+
+        Parameters
+        ----------
+        G : ndarray, shape (M, n_terms), or (n_terms,) for one
+            Each row a linear function g of θ (engineering units).
+
+        Returns
+        -------
+        ndarray, shape (M,)
+            Each >= 0, in the units of gᵀθ, squared.
+        """
         G = np.atleast_2d(np.asarray(G, float))
         if self.cov_factor is not None:
             return np.einsum("ij,ij->i", G @ self.cov_factor.T, G @ self.cov_factor.T)
         return np.clip(np.einsum("ij,jk,ik->i", G, self.cov, G), 0, None)
 
     def std_of(self, G: np.ndarray) -> np.ndarray:
-        """The standard deviations √(gᵀ cov g) of the rows of ``G`` (shape (M, n_terms)), shape (M,): each row over
-        the power of two above its largest |entry| (exact), so that a deviation within the float range is one where
-        its variance is not (a static curve's at ū = 1e200, about 1e198, read inf through its variance 1e396)."""
+        """The standard deviations √(gᵀ cov g) of the rows of ``G``: each row over the power of two above its
+        largest |entry| (exact), so that a deviation within the float range is one where its variance is not (a
+        static curve's at ū = 1e200, about 1e198, read inf through its variance 1e396).
+
+        Parameters
+        ----------
+        G : ndarray, shape (M, n_terms), or (n_terms,) for one
+            Each row a linear function g of θ (engineering units).
+
+        Returns
+        -------
+        ndarray, shape (M,)
+            Each >= 0, in the units of gᵀθ (NaN for a row with an infinite entry).
+        """
         G = np.atleast_2d(np.asarray(G, float))
         e = binary_exponent(np.max(np.abs(G), axis=1, initial=0.0))
         # a gradient beyond the float range (inf) gives NaN here, which the bands name (_refuse_overflow)
@@ -298,8 +320,18 @@ class ParameterUncertainty(Relocked):
             return self.cov / np.outer(s, s)
 
     def covers(self, theta: np.ndarray) -> np.ndarray:
-        """Which components of ``theta`` (shape (n_terms,), finite) lie in their interval, shape (n_terms,) bool (to the
-        round-off of the estimate: a constrained parameter's interval has zero width)."""
+        """Which components of ``theta`` lie in their interval (to the round-off of the estimate: a constrained
+        parameter's interval has zero width).
+
+        Parameters
+        ----------
+        theta : ndarray, shape (n_terms,)
+            Finite parameters, engineering units (e.g. the true ones of a simulated plant).
+
+        Returns
+        -------
+        ndarray of bool, shape (n_terms,)
+        """
         th = np.asarray(theta, float)
         if th.shape != self.theta.shape:
             raise ValueError(f"theta must have shape {self.theta.shape} (one value per term), got {th.shape}")
@@ -313,13 +345,29 @@ class ParameterUncertainty(Relocked):
         return (th >= iv[:, 0] - slack) & (th <= iv[:, 1] + slack)
 
     def with_level(self, level: float) -> "ParameterUncertainty":
-        """The same covariance with intervals at another confidence level."""
+        """The same covariance with intervals at another confidence level.
+
+        Parameters
+        ----------
+        level : float
+            Confidence level, in (0, 1) (e.g. 0.95).
+
+        Returns
+        -------
+        ParameterUncertainty
+        """
         level = check_level(level)
         return ParameterUncertainty(self.model, self.cov, level, self.dof, self.sigma2, self.method,
                                     self.constraints, self.noise_cov, self.static_sigma2, self.cov_factor)
 
     def cluster_cov(self) -> np.ndarray:
-        """Covariance of the cluster coefficients Σ = Rθ, shape (n_clusters, n_clusters)."""
+        """Covariance of the cluster coefficients Σ = Rθ.
+
+        Returns
+        -------
+        ndarray, shape (n_clusters, n_clusters)
+            R cov Rᵀ, in the clusters' units (products of their pairs'), clusters in ``cluster_map()`` order.
+        """
         R = self.model.cluster_map().R
         if self.cov_factor is not None:
             FR = self.cov_factor @ R.T
@@ -327,7 +375,14 @@ class ParameterUncertainty(Relocked):
         return R @ self.cov @ R.T
 
     def cluster_frame(self) -> pd.DataFrame:
-        """One row per cluster: Σ, its standard deviation and interval (a constrained cluster has 0)."""
+        """The clusters' estimates and their uncertainty as a table.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per cluster (index ``cluster``, its name): ``value`` (Σ), ``std`` (0 for a constrained
+            cluster), ``low`` and ``high`` (the interval at :attr:`level`), in the cluster's units.
+        """
         import pandas as pd
 
         cm = self.model.cluster_map()
@@ -338,7 +393,14 @@ class ParameterUncertainty(Relocked):
                             index=pd.Index(cm.names, name="cluster"))
 
     def to_frame(self) -> pd.DataFrame:
-        """One row per term: θ, std, interval, relative std (std / |θ|)."""
+        """The parameters' estimates and their uncertainty as a table.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per term (index ``term``): ``theta``, ``std``, ``low`` and ``high`` (the interval at
+            :attr:`level`), in the parameter's engineering units, and ``rel std`` (std / |θ|, dimensionless).
+        """
         import pandas as pd
 
         iv = self.intervals
@@ -1494,7 +1556,16 @@ class StaticCurveBand(Relocked):
         _check_static_band(self, (M,), (M,))
 
     def to_frame(self) -> pd.DataFrame:
-        """One row per ū: ȳ, its band and std, the gain, its band and std (and the undefined fraction)."""
+        """The band as a table.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per ū (index ``ubar``, input units): ``ybar``, ``ybar low``, ``ybar high``, ``ybar std`` (output
+            units), ``gain``, ``gain low``, ``gain high``, ``gain std`` (output units per input unit) and
+            ``undefined`` (the fraction of Monte Carlo draws without a stable equilibrium near the
+            estimate's there, left out of the band; 0 for the delta method).
+        """
         import pandas as pd
 
         return pd.DataFrame({"ybar": self.ybar, "ybar low": self.ybar_low, "ybar high": self.ybar_high,
@@ -1564,8 +1635,17 @@ class StaticSurfaceBand(Relocked):
         _check_static_band(self, (ub.shape[0],), ub.shape)
 
     def to_frame(self) -> pd.DataFrame:
-        """One row per point (indexed by the inputs' levels): ȳ, its band and std, each input's gain with its band
-        and std (columns ``gain <name>``, ``gain <name> low`` …) and the undefined fraction."""
+        """The band as a table.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per point (a MultiIndex of the inputs' levels, named by the inputs): ``ybar``, ``ybar low``,
+            ``ybar high``, ``ybar std`` (output units), each input's gain with its band and std (columns
+            ``gain <name>``, ``gain <name> low``, ``gain <name> high``, ``gain <name> std``; output units per that
+            input's unit) and ``undefined`` (the fraction of Monte Carlo draws without a stable equilibrium near the
+            estimate's there, left out of the band; 0 for the delta method).
+        """
         import pandas as pd
 
         cols: dict[str, np.ndarray] = {"ybar": self.ybar, "ybar low": self.ybar_low, "ybar high": self.ybar_high,
