@@ -322,6 +322,11 @@ class LocalModel(Relocked):
         ----------
         input : int or str
             The input, by position in ``input_names`` or by name.
+
+        Returns
+        -------
+        ndarray of complex, shape (<= L_u − 1,)
+            The zeros (none for an input that no term moves).
         """
         self._need()
         row = self.b[self._input_index(input)]
@@ -381,6 +386,11 @@ class LocalModel(Relocked):
             Length of the response.
         input : int or str
             The input stepped, by position or name.
+
+        Returns
+        -------
+        ndarray, shape (n_samples,)
+            Δy(k) in output units for a step of one input unit (deviation from ȳ).
         """
         self._need()
         n = check_count(n_samples, "n_samples", low=1)
@@ -398,6 +408,11 @@ class LocalModel(Relocked):
             Angular frequencies (rad/s), up to the Nyquist frequency π/Ts.
         input : int or str
             The input, by position or name.
+
+        Returns
+        -------
+        ndarray of complex, shape (K,)
+            Output units per input unit.
         """
         self._need()
         w = np.atleast_1d(real_array(omega, "omega", "angular frequencies (numbers, rad/s)"))
@@ -427,6 +442,11 @@ class LocalModel(Relocked):
             The input stepped.
         band : float
             Fraction of the final value (dimensionless, default 0.02).
+
+        Returns
+        -------
+        float
+            Seconds; inf or NaN as said above.
         """
         band = check_real(band, "band", low=0, low_open=True, high=1, high_open=True)
         i = self._input_index(input)
@@ -465,6 +485,11 @@ class LocalModel(Relocked):
         a_l, B's rows the b_il, C = [1, 0, …], D = 0. Its eigenvalues are :attr:`poles` and
         n − L_y poles at z = 0 (input lags beyond the output lags). Inputs are named after
         ``input_names``, the output ``"y"``. Needs python-control (``pip install graybox[control]``).
+
+        Returns
+        -------
+        control.StateSpace
+            n states, m inputs, 1 output; Δu in input units, Δy in output units.
         """
         self._need()
         return local_statespace(self)
@@ -474,6 +499,11 @@ class LocalModel(Relocked):
 
         G_i(z) = Σ_l b_il z^(n−l) / (z^n − Σ_l a_l z^(n−l)), n = max(L_y, L_u), in deviation
         variables. Needs python-control (``pip install graybox[control]``).
+
+        Returns
+        -------
+        control.TransferFunction
+            1 output × m inputs, output units per input unit.
         """
         self._need()
         return local_transfer_function(self)
@@ -944,7 +974,17 @@ class OperatingCurve(Relocked):
         return self.gain_low is not None
 
     def to_frame(self) -> Any:
-        """One row per operating point (pandas DataFrame): ȳ, gain, τ, ζ, ρ, settling time, status, bands."""
+        """The operating curve as a table.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per operating point (index ``ubar``, or a MultiIndex by input with several inputs; input
+            units): ``ybar`` (output units), ``gain`` (output units per input unit; ``gain <input>`` per input with
+            several), ``time constant`` and ``settling time`` (s; with several inputs ``settling time (<first
+            input> step)``), ``damping``, ``spectral radius``, ``status``, and the bands' columns (``gain low``,
+            ``gain high``, ``time constant low``, ``time constant high``, ``undefined``) when there are bands.
+        """
         import pandas as pd
 
         single = self.ubar.ndim == 1

@@ -1815,6 +1815,15 @@ def pumping_data_dir() -> Path:
     An installed package carries them as package data ``graybox/data/pumping`` (mapped from the
     repository's ``data/pumping`` by pyproject.toml); a source checkout (or an editable install)
     reads ``<repo>/data/pumping`` directly.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    FileNotFoundError
+        Neither place holds the data (both named).
     """
     return bundled_data_dir("pumping", "the bundled pumping data", "graybox.datasets.pumping")
 
@@ -1922,6 +1931,11 @@ def find_buck_dir(path: str | os.PathLike | None = None) -> Path:
     ----------
     path : str or path-like, optional
         The folder to use.
+
+    Returns
+    -------
+    pathlib.Path
+        The folder found.
 
     Raises
     ------

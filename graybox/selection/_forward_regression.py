@@ -320,9 +320,12 @@ class Selection(Relocked):
     def to_frame(self) -> pd.DataFrame:
         """One row per evaluated term, in order.
 
-        Columns: ``term`` (str), ``ERR``, ``cumulative ERR``, the criterion (e.g. ``aic``,
-        value of the model made of this term and those above it), ``selected`` (bool),
-        ``theta`` (LS parameter, NaN when not selected). Index: rank 1 … K.
+        Returns
+        -------
+        pandas.DataFrame
+            Columns: ``term`` (str), ``ERR``, ``cumulative ERR`` (fractions of yᵀy), the criterion (e.g. ``aic``,
+            value of the model made of this term and those above it), ``selected`` (bool),
+            ``theta`` (LS parameter, engineering units, NaN when not selected). Index: rank 1 … K.
         """
         import pandas as pd
 
