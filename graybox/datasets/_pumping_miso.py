@@ -222,9 +222,8 @@ class TwoSpeedPumpingPlant:
 
         Parameters
         ----------
-        speed1, speed2 : float or array_like
-            Constant speed references of the two pump sets (rpm), within the rig's ``speed_range``; broadcast
-            together.
+        speed1, speed2 : float or array_like, shapes that broadcast together
+            Constant speed references of the two pump sets (rpm), within the rig's ``speed_range``.
 
         Returns
         -------
@@ -244,9 +243,8 @@ class TwoSpeedPumpingPlant:
 
         Parameters
         ----------
-        speed1, speed2 : float or array_like
-            Constant speed references of the two pump sets (rpm), within the rig's ``speed_range``; broadcast
-            together.
+        speed1, speed2 : float or array_like, shapes that broadcast together
+            Constant speed references of the two pump sets (rpm), within the rig's ``speed_range``.
 
         Returns
         -------
@@ -263,9 +261,8 @@ class TwoSpeedPumpingPlant:
 
         Parameters
         ----------
-        speed1, speed2 : float or array_like
-            Constant speed references of the two pump sets (rpm), within the rig's ``speed_range``; broadcast
-            together.
+        speed1, speed2 : float or array_like, shapes that broadcast together
+            Constant speed references of the two pump sets (rpm), within the rig's ``speed_range``.
 
         Returns
         -------
