@@ -193,6 +193,36 @@ def test_every_public_function_and_method_has_a_numpy_parameters_section():
     assert not missing, missing
 
 
+def test_every_public_class_names_each_of_its_fields():
+    """A public class says each argument of its constructor (its fields) with type, units and shape, in a Parameters
+    or an Attributes section: Selection's and SEMPResult's ``units``, GAOptions' ``stall``, SpecError's ``source``
+    and ``line`` and SpecTypeError's four were in none."""
+    import inspect
+
+    import graybox as gb
+    from graybox._layers import LAYERS
+
+    missing, seen = [], set()
+    for module in [importlib.import_module(f"graybox.{u}") for u, _, _ in LAYERS
+                   if not u.startswith("_") and u != "reproduce"] + [gb]:
+        for name in module.__all__:
+            obj = getattr(module, name)
+            if not isinstance(obj, type) or id(obj) in seen:
+                continue
+            seen.add(id(obj))
+            try:
+                params = [p for p in inspect.signature(obj).parameters if not p.startswith("_")]
+            except ValueError:  # an exception or warning with the built-in (*args) constructor
+                continue
+            doc = inspect.getdoc(obj) or ""
+            body = "\n".join(_section(doc, title) or "" for title in ("Parameters", "Attributes"))
+            named = {n.lstrip("*") for line in re.findall(r"^(\*{0,2}\w[\w, *]*?)(?: :|$)", body, re.M)
+                     for n in re.split(r",\s*", line)}
+            if set(params) - named:
+                missing.append(f"{module.__name__}.{name}: {sorted(set(params) - named)}")
+    assert not missing, missing
+
+
 def test_every_public_function_and_method_that_returns_a_value_has_a_returns_section():
     """What a public callable returns is said in a numpy-style Returns section (its type, units and shape), not in
     prose only: 134 did not (j1, js, parse_structure, Model.predict and static_curve, the results' to_frame tables,

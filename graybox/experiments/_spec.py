@@ -90,6 +90,10 @@ class SpecError(ValueError):
         Where the problem is, e.g. ``("variants", 2, "options", "solver")``.
     problem : str
         What is wrong, in words.
+    source : str or None
+        The spec's file (or the name given to its text), when known.
+    line : int or None
+        The line of the key in that TOML text, when known.
     """
 
     def __init__(self, problem: str, path: Sequence[str | int] = (), source: str | None = None,
@@ -129,6 +133,11 @@ class SpecTypeError(SpecError, TypeError):
     A ``TypeError``, as graybox's argument checks raise for a wrong type (``graybox.core._validation``),
     and a :class:`SpecError`, so that ``except SpecError`` (the command line's one-line message) still
     catches every problem of a spec, with its key and line.
+
+    Attributes
+    ----------
+    problem, path, source, line
+        As for :class:`SpecError`.
     """
 
 

@@ -245,6 +245,9 @@ class Selection(Relocked):
         :class:`~graybox.Model`'s; :func:`frols` takes the records').
     Ts : float, optional
         The sampling period (s) of the records it was fitted on (None: unknown); :attr:`model` carries it.
+    units : tuple, optional
+        The units of the input(s) and the output of those records (the input's one str, or one per input;
+        :func:`frols` takes the records'); :attr:`model` carries them. Empty: unknown.
     """
 
     structure: Structure
