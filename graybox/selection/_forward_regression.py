@@ -835,7 +835,7 @@ def _frols_raw(candidates: Structure, data: object, *, n_terms: int | None, tol:
         forced, K = list(plan.order), (K if mode == "criterion" else n_plan)
     chosen, n_dependent = _forward(cols, process, forced, K, rule if plan is None else None, rank_tol,
                                    n_included=n_included, search=search)
-    C, g = _chosen_factors(cols, process, chosen)
+    C, g, rest = _chosen_factors(cols, process, chosen)
     if n_dependent:
         dep_terms = [t for t, why in skipped if why == _DEPENDENT]
         said.append(f"{n_dependent} candidate(s) dropped as linear combinations of selected terms on these data: "
@@ -846,7 +846,7 @@ def _frols_raw(candidates: Structure, data: object, *, n_terms: int | None, tol:
     g = g[:k_eval]
     err_eval = g**2 / yy
     # RSS from the orthogonal decomposition, floored at round-off (see _RSS_FLOOR)
-    rss = np.maximum(yy - np.cumsum(g**2), _RSS_FLOOR * yy)
+    rss = np.maximum(rest + np.append(np.cumsum(g[::-1] ** 2)[::-1][1:], 0.0), _RSS_FLOOR * yy)
     if k_eval >= N:
         raise ValueError(f"{k_eval} terms need more than their {N} regression rows (no error left to fit)")
     curve = _unscaled_curve(curve_name, rss, N, exps.get("y", 0), n_usable - n_included, n_included)
@@ -1138,10 +1138,13 @@ def _forward(cols: _Columns, process: Structure, forced: list[int], K: int, rule
     return chosen, n_dependent
 
 
-def _chosen_factors(cols: _Columns, process: Structure, chosen: list[int]) -> tuple[np.ndarray, np.ndarray]:
-    """The triangular factor C (k × n) of the chosen columns and the output's coordinates g (k,)."""
+def _chosen_factors(cols: _Columns, process: Structure, chosen: list[int]) -> tuple[np.ndarray, np.ndarray, float]:
+    """The triangular factor C (k × n) of the chosen columns, the output's coordinates g (k,) and the energy of the
+    residual after all k (summed from the residual itself, not yᵀy − Σg²: that difference cancels to eps·yᵀy, far
+    above an exact fit's round-off when y sits on an offset)."""
     engine = cols.engine
     C, g = engine.C, engine.g
+    rest = engine.rss(len(chosen) - 1) if cols.method == "mgs" and chosen else None
     if cols.method == "gram" and chosen:
         # The Gram form ranks the candidates; the chosen ones' ERR, RSS and θ are then taken from
         # the triangular factor of [S_chosen, y] by TSQR over the same chunks (a second, narrow
@@ -1153,7 +1156,8 @@ def _chosen_factors(cols: _Columns, process: Structure, chosen: list[int]) -> tu
         C = np.zeros((k_, len(process)))
         C[:, chosen] = sign[:, None] * np.triu(R[:k_, :k_]) / cols.scales[chosen]
         g = sign * R[:k_, k_]
-    return C, g
+        rest = float(R[k_, k_] ** 2)
+    return C, g, (cols.yy if rest is None else rest)
 
 
 @dataclass(frozen=True, eq=False)
