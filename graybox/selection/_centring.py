@@ -55,6 +55,21 @@ def pooled_signals(data: object) -> dict[str, np.ndarray]:
             **{n: us[:, i] for i, n in enumerate(records[0].input_names)}}
 
 
+def round_off_gain(data: object, centred: object) -> float:
+    """How much the centred signals' round-off exceeds what their own size suggests: their digits were rounded at
+    the size recorded. The largest ratio of a signal's mean square as recorded to centred, at least 1 (a signal
+    that centring makes zero counts none)."""
+    raw, cen = pooled_signals(data), pooled_signals(centred)
+    gain = 1.0
+    with np.errstate(over="ignore"):  # near the float range's ends: no gain said (the caller scales there)
+        for name, x in raw.items():
+            c = cen[name]
+            ratio = float(np.mean(x * x)) / float(np.mean(c * c)) if np.any(c) else 1.0
+            if np.isfinite(ratio):
+                gain = max(gain, ratio)
+    return gain
+
+
 def _centre_of(x: np.ndarray) -> float:
     """The mean of a signal; for one held at a single level (:func:`_held`), that level: centred it is then exactly
     zero (:func:`centred_data`), where the mean's round-off (7.3 held: 7.3 − mean ≈ 1e-15) left columns of
