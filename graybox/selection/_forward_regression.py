@@ -97,8 +97,11 @@ _DEFAULT_MAX_TERMS = 50
 # one the criterion curve of noise-free data keeps "improving" at round-off and the penalty loses to ln(round-off).
 _RSS_FLOOR = 1e-20
 
-# Columns whose |cos| with an earlier one exceeds 1 − this are the same column up to scale.
-_DUPLICATE_TOL = 1e-10
+# Columns whose |cos| with an earlier one exceeds 1 − this are the same column up to scale: columns that are (a held
+# input's lags, a two-level input's square and the constant) meet it to the round-off of their sums, ~1e-15. At 1e-10
+# (an angle of 1.4e-5) a lagged output 1e5 times its spread from zero was 'proportional to 1' in the Gram form, which
+# tests |cos| alone (MGS groups by a random projection at 1e-8 first, and kept it): the two chose different terms.
+_DUPLICATE_TOL = 1e-12
 
 # The Gram form sees a candidate's orthogonalised energy as G_jj − Σ C_ij², a difference of
 # O(N) numbers: below about this fraction of N it is round-off, so a candidate under it is
