@@ -1141,9 +1141,10 @@ def _forward(cols: _Columns, process: Structure, forced: list[int], K: int, rule
         engine.choose(k, j, active, last=k + 1 == K)
         chosen.append(j)
         # at the floor the fit is exact: it meets a tolerance below the floor too (the stopping rule's round_off)
-        if rule is not None and rule.mode == "tol" and k + 1 >= len(forced) and \
-                (engine.rss(k) <= rule.tol * yy or engine.rss(k) <= _floor_of(engine, chosen, yy, cols.n_rows, cols.gain)):
-            break
+        if rule is not None and rule.mode == "tol" and k + 1 >= len(forced):
+            r = engine.rss(k)
+            if r <= rule.tol * yy or r <= _floor_of(engine, chosen, yy, cols.n_rows, cols.gain):
+                break
     cols.engine = engine
     return chosen, n_dependent
 
