@@ -1551,7 +1551,7 @@ class StaticCurveBand(Relocked):
 
     def __post_init__(self) -> None:
         check_fields(self)
-        object.__setattr__(self, "units", check_units(self.units, "StaticCurveBand"))
+        object.__setattr__(self, "units", check_units(self.units, "StaticCurveBand", 1))  # a curve is of one input
         M = np.shape(self.ubar)[0]
         _check_static_band(self, (M,), (M,))
 
@@ -1624,9 +1624,9 @@ class StaticSurfaceBand(Relocked):
 
     def __post_init__(self) -> None:
         check_fields(self)
-        object.__setattr__(self, "units", check_units(self.units, "StaticSurfaceBand"))
         # a name given twice would merge two inputs' gain columns in to_frame
         object.__setattr__(self, "input_names", check_input_names(self.input_names, what="input_names"))
+        object.__setattr__(self, "units", check_units(self.units, "StaticSurfaceBand", len(self.input_names)))
         ub = frozen(self.ubar)
         m = len(self.input_names)
         if ub.ndim != 2 or ub.shape[1] != m:

@@ -730,7 +730,8 @@ _CODECS: dict[str, tuple[type | str, tuple[tuple[str, str], ...]]] = {
     "SimulationBand": (SimulationBand, (("model_name", "str"), ("record_name", "str"), ("method", "str"),
                                         ("level", "float"), ("n_samples", "int"), ("diverged", "float"),
                                         ("units", "units"), ("t", "array1"), ("y", "array1"), ("yhat", "array1"),
-                                        ("low", "array1"), ("high", "array1"), ("std", "array1"))),
+                                        ("low", "array1"), ("high", "array1"), ("std", "array1"),
+                                        ("input_names", "names_or_none"))),
     "CLSResult": (CLSResult, (("model", "Model"), ("static", "static_or_none"), ("constraints", "names"), ("solver", "str"))),
     "LocalModel": (LocalModel, (("ubar", "array1"), ("ybar", "float_or_none"), ("status", "str"), ("reason", "str"),
                                 ("a", "array1"), ("b", "array2"), ("Ts", "float"), ("input_names", "names"), ("name", "str"),
@@ -881,6 +882,8 @@ _ADDED: dict[str, dict[str, Any]] = {"ELSResult": {"n_direct": 0}, "Decision": {
                                      # units for display, carried since loaders36: none said
                                      "StaticPoints": {"units": _DEFAULT},
                                      "StaticCurveBand": {"units": _DEFAULT}, "StaticSurfaceBand": {"units": _DEFAULT},
+                                     # the record's inputs its per-input units are of, kept since mend62b: unknown
+                                     "SimulationBand": {"input_names": None},
                                      # the sequences' tails, carried since hunt59d: normal ones (the Bonferroni
                                      # limit those files hold); the permutations the limit was set on, since
                                      # stats61f: none (the Bonferroni limit, or its Edgeworth tails)

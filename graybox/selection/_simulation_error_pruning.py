@@ -117,7 +117,7 @@ class SEMPResult(Relocked):
         object.__setattr__(self, "input_names", names)
         if self.Ts is not None:
             object.__setattr__(self, "Ts", check_real(self.Ts, "Ts (seconds)", low=0, low_open=True))
-        object.__setattr__(self, "units", check_units(self.units, "SEMPResult"))
+        object.__setattr__(self, "units", check_units(self.units, "SEMPResult", len(names)))
         # finite, as the model it gives needs (files load through here); a read-only copy, as a Selection keeps
         object.__setattr__(self, "theta", frozen(check_theta(len(self.structure), self.theta)))
         check_choice(self.criterion, "criterion", CRITERIA)
