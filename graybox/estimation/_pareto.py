@@ -147,6 +147,11 @@ class ParetoSet(Relocked):
         The records the set was fitted on (:meth:`from_thetas` and the estimators keep them), or, for a set read
         from a file, their prints (names, lengths and hashes of blocks of samples, which :mod:`graybox.io` saves in
         their stead): :func:`graybox.decide_dsf` refuses them, a copy or a slice of one as choosing records.
+        Prints compare the samples' bits: they see a copy or a slice sample for sample, not the same samples in
+        other units or from another zero (y × 1000, °C as K) or rounded by a file (6 digits), which records refuse;
+        :meth:`check_record` refuses other units where the set and the choosing record both name them. To run the
+        records' check on a set read from a file, give it the records again where they are at hand:
+        ``dataclasses.replace(pareto, fitted_on=(data.ident,))``.
         A field, so that ``dataclasses.replace``, copies, pickles and files keep it; not shown in the repr.
         Empty (default): unknown, that check left to the set's own J_S.
     """
