@@ -42,8 +42,9 @@ def signal_offsets(data: object) -> dict[str, float]:
         every record (pooled); a signal held at one level, that level (centred, exactly zero).
     """
     if is_dask_data(data):
-        raise ValueError("centre=True needs the records in memory (a DaskRecord is not centred); "
-                         "subtract the means yourself, or leave centre out")
+        raise ValueError("centre=True needs the records in memory (a DaskRecord is not centred): give a Record of "
+                         "its samples, or leave centre out (a fit on signals less means subtracted by hand is a model "
+                         "of those, not of the signals in their own units)")
     return {name: _centre_of(x) for name, x in pooled_signals(data).items()}
 
 
