@@ -62,9 +62,9 @@ A :class:`~graybox.ParetoSet`'s ``fitted_on`` is saved as a print of each record
 input names and hashes of its samples in blocks of 16, or of N / 4096 for longer records: not the samples), so that
 the set read back refuses those records, copies and slices of them (at least two blocks long) as choosing records (:func:`graybox.decide_dsf`'s ``choose_on``) as the set
 did when it was made; a file written without it loads, with that check left to the set's own J_S. A print compares
-the samples' bits: the fitting data in other units, from another zero or rounded (y × 1000, a file written to 6 digits),
-which the set with its records refuses, pass it (units named on both sides are still compared); give the set read back
-its records (``dataclasses.replace(pareto, fitted_on=(data.ident,))``) to run that check.
+the samples' bits: the fitting data in other units, from another zero or rounded (y × 1000, a file written to 6
+digits), which the set with its records refuses, pass it (units named on both sides are still compared); give the set
+read back its records (``dataclasses.replace(pareto, fitted_on=(data.ident,))``) to run that check.
 """
 
 from __future__ import annotations
