@@ -434,11 +434,11 @@ class NeuralModel(Relocked):
         check_str(self.name, "name")
         if self.Ts is not None:
             object.__setattr__(self, "Ts", check_real(self.Ts, "Ts (seconds)", low=0, low_open=True))
-        object.__setattr__(self, "units", check_units(self.units, f"network {self.name!r}"))
         names = check_input_names(self.input_names)
         if len(names) != 1:
             raise ValueError(f"input_names: a network has one input, got {len(names)} names {names}")
         object.__setattr__(self, "input_names", names)
+        object.__setattr__(self, "units", check_units(self.units, f"network {self.name!r}", 1))  # its one input's
         ny = check_int(self.ny, "ny", low=0)
         nu = check_int(self.nu, "nu", low=1)
         ne = check_int(self.ne, "ne", low=0)
