@@ -155,3 +155,26 @@ def test_centre_refuses_dask_records():
     rec = gb.DaskRecord(da.from_array(IDENT.u, chunks=100), da.from_array(IDENT.y, chunks=100))
     with pytest.raises(ValueError, match="centre=True needs the records in memory"):
         gb.frols(CAND, rec, n_terms=3, centre=True)
+    # its advice was to subtract the means by hand, which gives a model of the centred signals, not of the user's
+    for fit in (gb.frols, gb.semp):
+        with pytest.raises(ValueError, match=r"give a Record of its samples.*not of the signals in their own units"):
+            fit(CAND, [rec, rec], n_terms=3, centre=True)
+
+
+def test_centred_selection_on_several_records_gives_a_model_in_their_units():
+    # checked (mend62b): several records are centred on their pooled means (as their concatenation), each record's
+    # rows its own; the model returned is the closure's least-squares fit on the raw records, in their units and
+    # period, and the same structure whatever the units and zeros (rpm and Pa far from zero here)
+    from graybox.selection._centring import least_squares
+
+    a, b = _record(5, 200), _record(6, 300)
+    base = None
+    for su, sy, du, dy in ((1.0, 1.0, 0.0, 0.0), (1e3, 1e5, 1200.0, 2e5)):
+        recs = [gb.Record(r.u * su + du, r.y * sy + dy, Ts=0.5, units=("rpm", "Pa")) for r in (a, b)]
+        sel = _quiet(gb.frols, CAND, recs, criterion="bic", centre=True)
+        np.testing.assert_allclose(sel.theta, least_squares(sel.structure, recs, CAND.max_lag)[0], rtol=1e-9)
+        assert (sel.model.units, sel.model.Ts) == (("rpm", "Pa"), 0.5)
+        X, y = gb.stacked_regressors(sel.structure, recs, start=CAND.max_lag)
+        assert np.sqrt(np.mean((X @ sel.theta - y) ** 2)) < 0.02 * sy  # the records' noise, 0.01, in their units
+        base = base or set(sel.structure)
+        assert set(sel.structure) == base

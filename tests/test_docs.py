@@ -132,29 +132,107 @@ def test_ebic_is_described_as_information_criterion_computes_it():
             assert said.group(1) == "twice", f"{where}: {said.group(0)!r}"
 
 
-def test_every_public_function_has_a_numpy_parameters_section():
-    """Public functions take numpy-style docstrings (the project's rule): the API pages list each parameter with
-    its type, units and shape from the Parameters section. mse, rrse, fit_percent, parse_term, cluster_map,
-    reference.eq1 / eq1_points and the simulators' input designs had prose only."""
+def _public_callables() -> dict:
+    """``{name: (function, its parameters, its return annotation)}`` of every public function of the subpackages'
+    ``__all__`` and of ``graybox.__all__``, and of every public method (static and class methods too) of their
+    public classes, those a class takes from graybox's own base classes included (a method without a docstring of
+    its own shows its base's, on the API page as in ``inspect.getdoc``). Parameters named ``_…`` are private."""
     import inspect
 
+    import graybox as gb
     from graybox._layers import LAYERS
 
-    missing = []
-    for unit in (u for u, _, _ in LAYERS if not u.startswith("_") and u != "reproduce"):
-        module = importlib.import_module(f"graybox.{unit}")
+    modules = [(f"graybox.{u}", importlib.import_module(f"graybox.{u}"))
+               for u, _, _ in LAYERS if not u.startswith("_") and u != "reproduce"] + [("graybox", gb)]
+    found: dict = {}
+    seen: set = set()
+    for where, module in modules:
         for name in module.__all__:
             obj = getattr(module, name)
-            if not inspect.isfunction(obj):
+            if id(obj) in seen:
                 continue
-            params = [p for p in inspect.signature(obj).parameters if not p.startswith("_")]
+            seen.add(id(obj))
+            members = [(f"{where}.{name}", obj, False)] if inspect.isfunction(obj) else []
+            for klass in reversed(obj.__mro__) if isinstance(obj, type) else ():  # an override comes last, and wins
+                if klass.__module__.startswith("graybox"):
+                    for attr, m in vars(klass).items():
+                        if attr.startswith("_") or not (inspect.isfunction(m) or isinstance(m, (staticmethod,
+                                                                                                 classmethod))):
+                            continue
+                        fn = m.__func__ if isinstance(m, (staticmethod, classmethod)) else m
+                        members.append((f"{where}.{name}.{attr}", fn, not isinstance(m, staticmethod)))
+            for qual, fn, bound in members:
+                sig = inspect.signature(fn)
+                params = [p for p in sig.parameters.values() if not p.name.startswith("_")][1 if bound else 0:]
+                found[qual] = (fn, [p.name for p in params], sig.return_annotation)
+    return found
+
+
+def _section(doc: str, title: str) -> str | None:
+    """The body of a numpy-style section of ``doc`` (up to the next section), or None when it has none."""
+    parts = doc.split(f"\n{title}\n{'-' * len(title)}\n", 1)
+    return None if len(parts) < 2 else re.split(r"\n\w[\w ]*\n-+\n", parts[1])[0]
+
+
+def test_every_public_function_and_method_has_a_numpy_parameters_section():
+    """Public functions take numpy-style docstrings (the project's rule): the API pages list each parameter with
+    its type, units and shape from the Parameters section. mse, rrse, fit_percent, parse_term, cluster_map,
+    reference.eq1 / eq1_points and the simulators' input designs had prose only; so had 96 public methods of public
+    classes (Model.simulate's u, y0, on_diverge and bound, Model.static_curve's, Record.slice's, StaticCurve.fit's,
+    ParetoSet.from_thetas' ten, the static constraints' ctx and theta, Grid.from_toml's path …)."""
+    import inspect
+
+    missing = []
+    for qual, (fn, params, _) in sorted(_public_callables().items()):
+        body = _section(inspect.getdoc(fn) or "", "Parameters") or ""
+        # an entry names one parameter or several ("xlabel, ylabel : str", "*prefix : str") at the start of its line
+        named = {n.lstrip("*") for line in re.findall(r"^(\*{0,2}\w[\w, *]*?)(?: :|$)", body, re.M)
+                 for n in re.split(r",\s*", line)}
+        if set(params) - named:
+            missing.append(f"{qual}: {sorted(set(params) - named)}")
+    assert not missing, missing
+
+
+def test_every_public_class_names_each_of_its_fields():
+    """A public class says each argument of its constructor (its fields) with type, units and shape, in a Parameters
+    or an Attributes section: Selection's and SEMPResult's ``units``, GAOptions' ``stall``, SpecError's ``source``
+    and ``line`` and SpecTypeError's four were in none."""
+    import inspect
+
+    import graybox as gb
+    from graybox._layers import LAYERS
+
+    missing, seen = [], set()
+    for module in [importlib.import_module(f"graybox.{u}") for u, _, _ in LAYERS
+                   if not u.startswith("_") and u != "reproduce"] + [gb]:
+        for name in module.__all__:
+            obj = getattr(module, name)
+            if not isinstance(obj, type) or id(obj) in seen:
+                continue
+            seen.add(id(obj))
+            try:
+                params = [p for p in inspect.signature(obj).parameters if not p.startswith("_")]
+            except ValueError:  # an exception or warning with the built-in (*args) constructor
+                continue
             doc = inspect.getdoc(obj) or ""
-            section = doc.split("\nParameters\n----------\n", 1)
-            # an entry names one parameter or several ("xlabel, ylabel : str") at the start of its line
-            named = set() if len(section) < 2 else {n for line in re.findall(r"^(\w[\w, ]*?)(?: :|$)", section[1], re.M)
-                                                    for n in re.split(r",\s*", line)}
+            body = "\n".join(_section(doc, title) or "" for title in ("Parameters", "Attributes"))
+            named = {n.lstrip("*") for line in re.findall(r"^(\*{0,2}\w[\w, *]*?)(?: :|$)", body, re.M)
+                     for n in re.split(r",\s*", line)}
             if set(params) - named:
-                missing.append(f"graybox.{unit}.{name}: {sorted(set(params) - named)}")
+                missing.append(f"{module.__name__}.{name}: {sorted(set(params) - named)}")
+    assert not missing, missing
+
+
+def test_every_public_function_and_method_that_returns_a_value_has_a_returns_section():
+    """What a public callable returns is said in a numpy-style Returns section (its type, units and shape), not in
+    prose only: 134 did not (j1, js, parse_structure, Model.predict and static_curve, the results' to_frame tables,
+    LocalModel.step and frequency_response, PumpingPlant.steady_flow, Grid.cells …)."""
+    import inspect
+
+    missing = [qual for qual, (fn, _, returns) in sorted(_public_callables().items())
+               if returns not in ("None", None, inspect.Signature.empty)
+               and _section(inspect.getdoc(fn) or "", "Returns") is None
+               and _section(inspect.getdoc(fn) or "", "Yields") is None]
     assert not missing, missing
 
 
@@ -188,28 +266,21 @@ def test_no_literal_on_an_api_page_shows_an_escaping_backslash(site):
     assert not shown, shown
 
 
-def test_every_array_parameter_of_a_public_function_gives_its_shape():
+def test_every_array_of_a_public_function_or_method_gives_its_shape():
     """An API page says each array's shape (the project's rule): nine entries typed ``ndarray`` or ``array_like`` did
     not (evaluate's and static_curve_band's y0, the θ that cls, pe_pareto and cls_uncertainty take as reference,
-    se_pareto's theta0, se_dsf's pe_lambdas, bootstrap_decision's lambdas, stacked_regressors' residuals)."""
+    se_pareto's theta0, se_dsf's pe_lambdas, bootstrap_decision's lambdas, stacked_regressors' residuals). Held for
+    the public methods' parameters and for what every public callable returns too."""
     import inspect
 
-    from graybox._layers import LAYERS
-
     shapeless = []
-    for unit in (u for u, _, _ in LAYERS if not u.startswith("_") and u != "reproduce"):
-        module = importlib.import_module(f"graybox.{unit}")
-        for name in module.__all__:
-            obj = getattr(module, name)
-            doc = inspect.getdoc(obj) or "" if inspect.isfunction(obj) else ""
-            section = doc.split("\nParameters\n----------\n", 1)
-            if len(section) < 2:
-                continue
-            body = re.split(r"\n\w[\w ]*\n-+\n", section[1])[0]  # up to the next section (Returns, Raises …)
-            for entry in re.split(r"\n(?=\w[\w, ]* :)", body):
+    for qual, (fn, _, _) in sorted(_public_callables().items()):
+        doc = inspect.getdoc(fn) or ""
+        for title in ("Parameters", "Returns"):
+            for entry in re.split(r"\n(?=\S)", _section(doc, title) or ""):
                 head = entry.split("\n", 1)[0]
                 if re.search(r"ndarray|array_like", head) and "shape" not in entry:
-                    shapeless.append(f"graybox.{unit}.{name}: {head}")
+                    shapeless.append(f"{qual} ({title}): {head}")
     assert not shapeless, shapeless
 
 

@@ -393,3 +393,21 @@ def test_dask_records_at_another_period_are_refused():
     b = gb.DaskRecord(da.from_array(u, chunks=100), da.from_array(y, chunks=100), Ts=0.2, name="b")
     with pytest.raises(ValueError, match="'a' is sampled every 0.1 s but 'b' every 0.2 s"):
         gb.frols(gb.Candidates(1, 1, degree=1), [a, b], n_terms=2)
+
+
+def test_a_lagged_output_on_an_offset_is_not_called_proportional_to_the_constant_by_the_gram_form():
+    # hunt62f: noise-free y ≈ 1e5 (±2 about it): y(k-1)'s angle to the constant is 4.5e-6 rad, told apart by the data
+    # to 1e-16. MGS keeps it (its duplicate test groups columns by a random projection first, at 1e-8); the Gram form
+    # took |cos| > 1 − 1e-10 alone for proportional, skipped y(k-1) and every y term 'proportional to 1' and chose
+    # 1, u(k-1), u(k-2) where MGS chooses the true 1, y(k-1), u(k-1), u(k-1)^2
+    u = np.random.default_rng(1).uniform(-1.0, 1.0, 200)
+    z = gb.Model(gb.Structure(["y(k-1)", "u(k-1)", "u(k-1)^2"]), np.array([0.5, 1.0, 0.1])).simulate(u, np.zeros(1))
+    rec = gb.Record(u, z + 1e5)
+    cand = gb.Candidates(2, 2, degree=2)
+    true = set(gb.Structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.CandidateWarning)
+        got = {m: gb.frols(cand, rec, search="exact", method=m) for m in ("mgs", "gram")}
+    assert set(got["mgs"].structure) == true
+    assert set(got["gram"].structure) == true
+    assert not any("proportional" in why for _, why in got["gram"].skipped)

@@ -50,7 +50,9 @@ def test_time_stamps_may_start_anywhere(tmp_path):
 
 
 @pytest.mark.parametrize("col, seconds", [("t [ms]", 0.5), ("time (min)", 30_000.0), ("t_ms", 0.5), ("Zeit/h", 1.8e6),
-                                          ("t [µs]", 5e-4), ("t_millis", 0.5), ("T (Days)", 4.32e7)])
+                                          ("t [µs]", 5e-4), ("t_millis", 0.5), ("T (Days)", 4.32e7),
+                                          # the table's nsec and nanoseconds: their stamps were read as seconds
+                                          ("t_nsec", 5e-7), ("time [nanoseconds]", 5e-7)])
 def test_a_time_column_named_in_another_unit_is_converted_as_a_units_rows(tmp_path, col, seconds):
     # was: stamps 0, 500, 1000 ms read as seconds, Ts = 500 s without a word (local models' time constants and every
     # controller designed on them off by 1000); then refused, where a units row's 'ms' converted (mend61e's 1ad8ce0d)

@@ -127,3 +127,25 @@ def test_dates_given_a_unit_of_elapsed_time_in_the_units_row_are_refused(tmp_pat
                "t,speed,p\nms,rpm,Pa\n2026-11-20 09:14:03,1000,2e5\n2026-11-20 09:14:04,1010,2e5\n")
     with pytest.raises(ValueError, match=r"unit 'ms', but the time column holds dates or clock times"):
         gb.load_record_csv(f, "speed", "p", time="t", units_row=True)
+
+
+# A units row (or a time column's name) was read whatever its case: 'Ms' (megaseconds) and 'MS' read as ms,
+# milliseconds, a period off by 10⁹. A symbol whose case names another unit is now read as written only, and refused,
+# naming the column, in another case; a word (Sec, MIN) names no other unit in any case and is read in any.
+@pytest.mark.parametrize("unit", ["Ms", "MS", "mS", "S", "H", "US"])
+def test_a_time_unit_in_another_case_is_refused_as_ambiguous_naming_the_column(tmp_path, unit):
+    rows = "t,speed,p\n{},rpm,Pa\n0,1000,2e5\n10,1010,2.01e5\n20,1020,2.02e5\n"
+    f = _write(tmp_path / "run.csv", rows.format(unit))
+    with pytest.raises(ValueError, match=rf"time column 't' is given the unit '{unit}', which differs from "
+                                         rf"'{unit.lower()}' only by case: ambiguous"):
+        gb.load_record_csv(f, "speed", "p", time="t", units_row=True)
+    named = _write(tmp_path / "named.csv", f"t [{unit}],speed,p\n0,1000,2e5\n10,1010,2.01e5\n")
+    if unit.lower() != "s":  # 't [s]' names seconds, which the stamps are read in without a unit
+        with pytest.raises(ValueError, match=rf"time column 't \[{unit}\]' is given the unit '{unit}'.*only by case"):
+            gb.load_record_csv(named, "speed", "p", time=f"t [{unit}]")
+
+
+@pytest.mark.parametrize("unit, Ts", [("ms", 0.01), ("Sec", 10.0), ("MIN", 600.0), ("Hours", 36000.0), ("s", 10.0)])
+def test_a_time_unit_as_written_or_a_word_in_any_case_is_read(tmp_path, unit, Ts):
+    f = _write(tmp_path / "run.csv", f"t,speed,p\n{unit},rpm,Pa\n0,1000,2e5\n10,1010,2.01e5\n20,1020,2.02e5\n")
+    assert gb.load_record_csv(f, "speed", "p", time="t", units_row=True).Ts == pytest.approx(Ts, rel=1e-12)

@@ -108,6 +108,30 @@ def test_a_loaded_pareto_set_refuses_what_the_fresh_one_refuses(tmp_path):
     assert gb.decide_dsf(back, band=1.0, choose_on=data.valid).chosen_on == "valid"
 
 
+def test_a_loaded_set_sees_copies_by_their_bits_and_its_records_given_back_see_other_units():
+    # the fresh set refused the fitting record with y × 1000 (the same data in other units, no units named) while
+    # the set read from a file chose on it: prints compare bits. The docstrings say so, and how to give the records back
+    import dataclasses
+    data = _data2()
+    fresh = gb.pe_pareto(ST2, data, lambdas=np.logspace(-3, 0, 4))
+    loaded = gb.from_json(gb.to_json(fresh))
+    kilo = gb.Record(data.ident.u, 1e3 * data.ident.y, name="ident in other units")
+    with pytest.raises(ValueError, match=r"choose_on: .*fitting record .* in other units \(its y = 1000 ×"):
+        gb.decide_dsf(fresh, band=1.0, choose_on=kilo)
+    assert gb.decide_dsf(loaded, band=1.0, choose_on=kilo).chosen_on == "ident in other units"
+    for doc in (ParetoSet.__doc__, gb.decide_dsf.__doc__):
+        assert "fitted_on=(data.ident,)" in doc and "other units" in doc
+    given_back = dataclasses.replace(loaded, fitted_on=(data.ident,))
+    with pytest.raises(ValueError, match=r"choose_on: .*fitting record .* in other units \(its y = 1000 ×"):
+        gb.decide_dsf(given_back, band=1.0, choose_on=kilo)
+    # units named on both sides are compared from the file as well
+    named = gb.pe_pareto(ST2, gb.Record(data.ident.u, data.ident.y, units=("V", "m")), data.static,
+                         lambdas=[1.0, 0.1])
+    with pytest.raises(ValueError, match="Pareto set was fitted with output unit 'm'"):
+        gb.decide_dsf(gb.from_json(gb.to_json(named)), band=1.0,
+                      choose_on=gb.Record(data.ident.u, 1e3 * data.ident.y, units=("V", "mm")))
+
+
 def test_an_old_file_without_the_prints_loads_and_checks_as_before():
     import json
     data = _data2()

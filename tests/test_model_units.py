@@ -322,3 +322,31 @@ def test_a_band_on_a_record_of_more_inputs_takes_their_units_by_name():
     wider = gb.Record(np.column_stack([np.linspace(0, 1, len(rec)), rec.u]), rec.y, Ts=2.0,
                       units=(("V", "", ""), "m"), input_names=("z", "q", "T"))
     assert gb.simulation_band(unc, wider).units == (("V", "l/min", "°C"), "m")
+
+
+def test_results_and_bands_take_one_unit_per_input_their_model_has():
+    # SEMPResult, StaticCurveBand, StaticSurfaceBand and SimulationBand kept units=(('a', 'b', 'c'), 'm') for a model
+    # of two inputs (one input for the curve band, and for a network), which a Model refuses
+    import pandas as pd
+
+    from graybox.selection._simulation_error_pruning import SEMPResult
+
+    three, z, Z = (("a", "b", "c"), "m"), np.zeros(3), np.zeros((3, 2))
+    st = gb.Structure(["y(k-1)", "q(k-1)", "T(k-1)"])
+    path = pd.DataFrame({c: [] for c in SEMPResult.PATH_COLUMNS})
+    with pytest.raises(ValueError, match=r"SEMPResult: units give 3 input units .* for 2 input"):
+        SEMPResult(st, np.ones(3), 0.1, path, pd.DataFrame(), "aic", "", 10, units=three)
+    with pytest.raises(ValueError, match=r"StaticCurveBand: units give 2 input units .* for 1 input"):
+        gb.StaticCurveBand(z, z, z, z, z, z, z, z, z, 0.95, "delta", 0, z, units=(("a", "b"), "m"))
+    with pytest.raises(ValueError, match=r"StaticSurfaceBand: units give 3 input units .* for 2 input"):
+        gb.StaticSurfaceBand(Z, ("q", "T"), z, z, z, z, Z, Z, Z, Z, 0.95, "delta", 0, z, units=three)
+    with pytest.raises(ValueError, match=r"network 'Neural': units give 2 input units .* for 1 input"):
+        gb.NeuralModel(np.zeros((2, 2)), np.zeros(2), np.zeros(2), 0.0, ny=1, nu=1, units=(("a", "b"), "m"))
+    with pytest.raises(ValueError, match=r"SimulationBand: units give 3 input units .* for 2 input"):
+        gb.SimulationBand(np.arange(3.0), z, z, z, z, z, 0.95, "delta", 0, 0.0, units=three, input_names=("q", "T"))
+    # one per input is kept; a band made by simulation_band names the inputs its units are of, and keeps them in a file
+    rec = _two_inputs((("l/min", "°C"), "m"))
+    band = gb.simulation_band(gb.ls_uncertainty(gb.els(st, rec).model, rec), rec)
+    assert (band.input_names, band.units) == (("q", "T"), (("l/min", "°C"), "m"))
+    back = gb.from_json(gb.to_json(band))
+    assert (back.input_names, back.units) == (("q", "T"), (("l/min", "°C"), "m"))

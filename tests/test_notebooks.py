@@ -76,3 +76,14 @@ def test_every_notebook_runs_its_quick_mode_and_says_what_its_text_claims(name, 
     unexpected = [(c, m) for c, m in said
                   if not any(c == category and re.search(match, m) for category, match in EXPECTED_WARNINGS[name])]
     assert not unexpected, f"{name}: warnings the notebook's run is not expected to give: {unexpected[:5]}"
+
+
+def test_the_miso_notebooks_grid_runs_in_a_fresh_store():
+    # 06 ran its grid in a fixed miso_grid.sqlite: a rerun after a change of graybox's code reused every cell (the
+    # store keys cells by package version, unchanged by a code change) and showed the old code's numbers
+    nb = json.loads((NOTEBOOKS / "06_miso.ipynb").read_text(encoding="utf-8"))
+    code = "\n".join("".join(c["source"]) for c in nb["cells"] if c["cell_type"] == "code")
+    calls = re.findall(r"(?:run_grid|load_results)\(([^)]*)\)", code)
+    assert calls and all(".sqlite" not in c for c in calls), calls  # no file named in the call: the store variable
+    assert re.search(r"^scratch = tempfile\.TemporaryDirectory\(.*\nstore = Path\(scratch\.name\) / ", code, re.M), \
+        "the store is not in a fresh directory"

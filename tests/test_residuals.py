@@ -420,3 +420,29 @@ def test_a_held_first_input_of_two_raises_no_numpy_warning():
         with pytest.warns(UserWarning, match="input 'c' is constant"):
             t = gb.residual_tests(model, gb.Record(u, y, input_names=["c", "v"]))
     assert list(t.tests) == ["xi_xi", "u_xi:v", "xi_xiu:v", "u2_xi:v", "u2_xi2:v"]
+
+
+def test_a_tie_with_the_permutation_limit_is_no_exceedance():
+    """Three residuals have six orders: the record's own, or its reverse (the same φ_ξξ(1)), is among the 199 drawn,
+    and its max |φ| equals the limit in exact arithmetic; the limit's FFT and the record's direct sums put one an ulp
+    above the other, and the correct model failed by round-off (φ_ξξ in 39 of 300 such records: 13 % at 95 %). A
+    permutation test counts a tie as no exceedance."""
+    model = gb.Model(gb.Structure(["u(k-1)"]), [0.8])
+    rng = np.random.default_rng(2)
+    ties = 0
+    for _ in range(25):
+        u = rng.standard_normal(4)
+        y = np.concatenate([[0.0], 0.8 * u[:-1]]) + rng.standard_normal(4)
+        t = gb.residual_tests(model, gb.Record(u, y), max_lag=1, seed=int(rng.integers(1000)))
+        for v in t.tests.values():
+            if abs(np.max(np.abs(v.phi)) - v.limit) <= 1e-12:
+                ties += 1
+                assert v.passed, v.name
+    assert ties >= 5
+    # a file written before (a tie kept as failed) still loads; beyond the round-off it is held to the verdict
+    tie = next(v for v in t.tests.values() if v.permutations)
+    top = float(np.max(np.abs(tie.phi)))
+    for limit, passed in ((top * (1 - 1e-15), False), (top * (1 - 1e-15), True)):
+        dataclasses.replace(tie, limit=limit, passed=passed)
+    with pytest.raises(ValueError, match="passed is True"):
+        dataclasses.replace(tie, limit=top * (1 - 1e-9), passed=True)

@@ -55,6 +55,10 @@ def test_selects_a_structure_in_the_band_and_reports_everything(data, tmp_path):
     assert res.rule == "one-se" and len(res.structure) == ok["n_terms"].min()
     assert res.table["JS_valid"][res.table["in_band"]].min() == pytest.approx(
         res.table.loc[res.table["vs_best"] == 0, "JS_valid"].min())
+    # the true plant's structures forget where they start: no row here diverges from a held start
+    assert res.table["wanders"].dtype == bool and not res.table["wanders"].any()
+    again = gb.load(gb.save(res, tmp_path / "sel.json"))
+    assert again.table["wanders"].tolist() == res.table["wanders"].tolist()
 
 
 def test_folds_when_there_is_one_record(data):
@@ -538,6 +542,45 @@ def test_one_se_takes_the_fewest_terms_within_one_standard_error_then_the_smalle
     table, scores = _rule_table(blocks[:2] + [base * np.exp([0.2, 0.1, -0.2, 0.1, -0.1])], [5, 5, 3], [0.8, 0.2, 0.9])
     assert _choose(table.copy(), scores, _equal(scores), "one-se")[0] == 2
     assert _choose(table.copy(), scores, _equal(scores), "min")[0] == 0
+
+
+def test_a_row_whose_model_diverges_from_a_held_start_is_not_chosen_unless_every_row_does():
+    from graybox.experiments._select import _choose
+
+    rng = np.random.default_rng(3)
+    base = 1.0 + 0.2 * rng.random(5)
+    table, scores = _rule_table([base * 0.5, base, base * 1.02], [4, 6, 8], [0.0, 0.0, 0.0])
+    plain, _ = _choose(table.copy(), scores, _equal(scores), "one-se")
+    assert plain == 0  # the best by far, and the fewest terms
+    pos, _ = _choose(table.assign(wanders=[True, False, False]), scores, _equal(scores), "one-se")
+    assert pos == 1  # the best of the rows that forget their start; the others judged against it
+    both = table.assign(wanders=[True, False, False])
+    _choose(both, scores, _equal(scores), "one-se")
+    assert both["eligible"].tolist()[:2] == [False, True] and both["vs_best"].iloc[1] == 0.0
+    # every row wanders: the choice is as if none did (nothing better to offer)
+    assert _choose(table.assign(wanders=True), scores, _equal(scores), "one-se")[0] == plain
+
+
+def test_wanders_marks_a_model_bounded_only_near_the_records_own_start():
+    # y(k) = 0.5 y(k-1) + 0.3 y(k-1)^2 + u(k-1) has a stable equilibrium near 2u and an unstable one near 1.67 for
+    # small u: from the record's own start (0) it stays bounded, from the measured output's 95th percentile (3)
+    # it diverges. A linear model of the same record forgets any start.
+    from types import SimpleNamespace
+    from graybox.experiments._select import _Plan, _wanders
+
+    rng = np.random.default_rng(0)
+    u = 0.1 * rng.random(300)
+    y = np.where(np.arange(300) % 50 < 25, 0.0, 3.0)  # a measured output that visits 3 (the model's basin is < 1.67)
+    y[:2] = 0.0
+    rec, val = gb.Record(u, y, name="fit"), gb.Record(u[::-1].copy(), y, name="choose")
+    plan = _Plan((rec,), ((None, val, np.array([2, 300])),), None, None, np.inf, 2)
+    jobs = [SimpleNamespace(terms="y(k-1) + y(k-1)^2 + u(k-1)"), SimpleNamespace(terms="y(k-1) + u(k-1)")]
+    results = [{"thetas": np.array([[0.5, 0.3, 1.0]])}, {"thetas": np.array([[0.5, 1.0]])}]
+    assert _wanders(jobs, results, [0, 0], plan).tolist() == [True, False]
+    m = gb.Model(gb.parse_structure(jobs[0].terms), results[0]["thetas"][0])
+    assert np.all(np.isfinite(m.simulate(rec, on_diverge="nan")))  # bounded from the record's own start
+    # a row without a model (no member) is not marked
+    assert _wanders(jobs, [{"thetas": np.full((1, 3), np.nan)}, results[1]], [0, -1], plan).tolist() == [False, False]
 
 
 def test_a_row_that_fails_on_some_blocks_is_not_within_one_standard_error_of_a_steady_one():

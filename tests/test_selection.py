@@ -461,3 +461,52 @@ def test_a_tolerance_below_round_off_is_met_by_an_exact_fit(search):
         sel = gb.semp(cand, rec, tol=1e-30) if search == "semp" else frols(cand, rec, tol=1e-30, search=search)
     assert set(sel.structure) == set(TRUE)
     assert "not reached" not in sel.stop
+
+
+# ---------------------------------------------------------------- round-off of the residual sums (hunt62f)
+
+
+def offset_record(c: float, n: int = 200, scale: float = 1.0) -> Record:
+    """Noise-free y(k) − c = 0.5 (y(k-1) − c) + u(k-1) + 0.1 u(k-1)² at y ≈ c (each sample ±2 about it), times
+    ``scale``: the true raw structure is 1, y(k-1), u(k-1), u(k-1)^2."""
+    u = np.random.default_rng(1).uniform(-1.0, 1.0, n)
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.5 * y[k - 1] + u[k - 1] + 0.1 * u[k - 1] ** 2
+    return Record(u, (y + c) * scale)
+
+
+@pytest.mark.parametrize("method", ["mgs", "gram"])
+def test_the_rss_curve_is_each_prefix_s_own_least_squares_residual_at_an_output_offset(method):
+    # was: RSS = yᵀy − Σg², a difference that cancels to eps·yᵀy (7e-6 at y ≈ 1e4 here): greedy's path
+    # 1, u(k-1)y(k-1), y(k-1), u(k-1)^2 fits to RSS 4.1e-7 and was stored as 3.0e-10 (the 1e-20 yᵀy floor), so BIC
+    # took that wrong 4-term model as an exact fit
+    rec = offset_record(1e4)
+    cand = Candidates(2, 2, degree=2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", CandidateWarning)
+        sel = frols(cand, rec, n_terms=6, method=method)
+    for k in range(1, 7):
+        psi, y = stacked_regressors(sel.structure[:k], rec, start=cand.max_lag)
+        theta = np.linalg.lstsq(psi, y, rcond=None)[0]
+        resid = y - psi @ theta
+        if resid @ resid > 1e-12:  # well above the round-off of either computation
+            np.testing.assert_allclose(sel.rss[k - 1], resid @ resid, rtol=1e-6, err_msg=str(sel.structure[:k]))
+
+
+@pytest.mark.parametrize("scale", [1.0, 1e-12])
+def test_noise_free_far_from_zero_the_exact_fit_is_told_from_a_near_one(scale):
+    # y ≈ 1e6 (and the same in units where y ≈ 1e-6): u(k-1)y(k-1) ≈ 1e6 u(k-1), so 1, u(k-1)y(k-1), y(k-1), u(k-1)^2
+    # fits to RSS 4e-11 (1.4e-25 yᵀy), 3e6 eps² yᵀy; the true terms fit to ~1 eps² yᵀy. The floor at 1e-20 yᵀy
+    # counted both exact: exact's "proven" best 4 terms were the wrong ones, and greedy stopped at them (BIC)
+    rec = offset_record(1e6, scale=scale)
+    cand = Candidates(2, 2, degree=2)
+    true = set(Structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", CandidateWarning)
+        exact = frols(cand, rec, search="exact")
+        greedy = frols(cand, rec, criterion="bic")
+    assert set(exact.structure) == true
+    assert true <= set(greedy.structure)  # greedy's path took u(k-1)y(k-1) first: it stays, the true terms join it
+    _, y = stacked_regressors(exact.structure, rec, start=cand.max_lag)
+    assert exact.subset_rss[list(exact.subsets).index(exact.structure)] < 1e-26 * (y @ y)

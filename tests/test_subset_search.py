@@ -6,7 +6,7 @@ import warnings
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import HealthCheck, assume, example, given, settings
 from hypothesis import strategies as st
 
 import graybox as gb
@@ -326,3 +326,38 @@ def test_a_selection_whose_subsets_leave_out_its_structure_is_refused():
         dataclasses.replace(sel, subsets=tuple(sel.subsets[i] for i in keep), subset_rss=sel.subset_rss[keep])
     with pytest.raises(ValueError, match="greedy"):
         dataclasses.replace(sel, search="greedy")
+
+
+@settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+@given(seed=st.integers(0, 10_000), hold=st.integers(1, 4), log_c=st.sampled_from([None, 3.0, 5.0, 6.0]),
+       n_y=st.integers(1, 2), n_u=st.integers(1, 2), scale=st.sampled_from([1e-9, 1.0, 1e9]))
+@example(seed=0, hold=1, log_c=5.0, n_y=1, n_u=2, scale=1e-9)
+def test_exact_tells_the_true_structure_on_an_output_offset_from_its_look_alikes(seed, hold, log_c, n_y, n_u, scale):
+    """Noise-free y = (z + c) × scale, z a NARX linear in its y-lags: whenever the true raw structure's one-step error
+    is ≥ 10× below every other subset of its size (brute force), exact finds it. At y ≈ 1e5 (the example) y(k-2)^2
+    ≈ 2c y(k-2) − c² fits to 1.1e-24 yᵀy, the truth to 6e-32: the floor at 1e-20 yᵀy took them for equal, and exact's
+    'proven' best was 1, u(k-1)^2, u(k-2)^2, y(k-2)^2."""
+    cand = Candidates(2, 2, degree=2)
+    rng = np.random.default_rng(seed)
+    y_terms = list(rng.choice(["y(k-1)", "y(k-2)"], n_y, replace=False))
+    u_terms = list(rng.choice(["u(k-1)", "u(k-2)", "u(k-1)^2", "u(k-1)u(k-2)", "u(k-2)^2"], n_u, replace=False))
+    theta = np.concatenate([rng.uniform(0.1, 0.4, n_y) * rng.choice([-1.0, 1.0], n_y),
+                            rng.uniform(0.2, 1.0, n_u) * rng.choice([-1.0, 1.0], n_u)])
+    u = staircases(seed, 300, hold, 1)
+    z = Model(Structure(y_terms + u_terms), theta).simulate(u, np.zeros(2))
+    c = 0.0 if log_c is None else 10.0**log_c
+    rec = Record(u, (z + c) * scale)
+    true = set(Structure((["1"] if c else []) + y_terms + u_terms))  # y − c obeys the same equation: plus a constant
+    psi, target = stacked_regressors(cand.process, rec, start=cand.max_lag)
+    # every subset's fit on numpy's triangular factor of [Ψ, y] (unit-RMS columns): the same residual, 15 rows
+    R = np.linalg.qr(np.column_stack([psi / np.sqrt(np.mean(psi**2, axis=0)), target]), mode="r")
+    yy = float(target @ target)
+    idx_true = frozenset(cand.process.index(t) for t in true)
+    rss = {frozenset(S): float(np.sum((R[:, -1] - R[:, S] @ np.linalg.lstsq(R[:, S], R[:, -1], rcond=None)[0]) ** 2))
+           for S in itertools.combinations(range(len(cand.process)), len(true))}
+    others = min(v for S, v in rss.items() if S != idx_true)
+    assume(others >= 10 * rss[idx_true] and others > 1e-24 * yy)  # 1e-24 yᵀy: far above an exact fit's round-off
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", CandidateWarning)
+        sel = frols(cand, rec, n_terms=len(true), search="exact")
+    assert set(sel.structure) == true

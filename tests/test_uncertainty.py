@@ -349,12 +349,12 @@ def test_monte_carlo_static_bands_say_when_draws_reach_no_equilibrium():
     assert np.all(band2.undefined == 0)
 
 
-def _first_order(a):
-    """LS uncertainty of y(k) = a y(k-1) + u(k-1) + noise: gain 1/(1 − a)."""
+def _first_order(a, b=1.0):
+    """LS uncertainty of y(k) = a y(k-1) + b u(k-1) + noise: gain b/(1 − a)."""
     rng = np.random.default_rng(0)
     s = gb.Structure(["y(k-1)", "u(k-1)"])
     u = rng.uniform(0, 1, 300)
-    rec = gb.Record(u, gb.simulate(s, np.array([a, 1.0]), u, np.zeros(1)) + 0.01 * rng.standard_normal(300))
+    rec = gb.Record(u, gb.simulate(s, np.array([a, b]), u, np.zeros(1)) + 0.01 * rng.standard_normal(300))
     return gb.ls_uncertainty(gb.els(s, rec, noise=0).model, rec)
 
 
@@ -368,10 +368,20 @@ def test_static_curve_band_far_out_is_the_band_there_or_names_its_overflow():
     assert band.ybar_std[0] == pytest.approx(1e200 * np.sqrt(g @ cov @ g), rel=1e-9)
     near, far = (gb.static_curve_band(q, [x], method="monte-carlo", n_samples=200) for x in (1.0, 1e200))
     assert far.ybar_std[0] == pytest.approx(1e200 * near.ybar_std[0], rel=1e-9)  # the same draws, ȳ linear in ū
-    # ȳ = 1.785e308 at ū = 1e308: the delta method's gradient leaves the float range; the draws' band does not
+    # ȳ = 1.785e308 at ū = 1e308: the delta method's gradient leaves the float range (∂ȳ/∂a = ȳ / (1 − a) = 3.2e308),
+    # not the band (ū = 1e307's ten times over: 1.7815e308 … 1.7894e308), which was said to leave it, and the gain's
+    # band too (1.78 ± 0.004 at every ū); the draws give the band
     q = _first_order(0.44)
-    with pytest.raises(ValueError, match=r"the band overflows at ū = 1e\+308 \(ȳ = 1\.78.*e\+308\): the band of ȳ "
-                                         r"and the band of its gain leave the float range.*monte-carlo"):
+    with pytest.raises(ValueError, match=r"the delta method's gradient of ȳ leaves the float range \(±1\.8e308\) at "
+                                         r"ū = 1e\+308 \(ȳ = 1\.78.*e\+308\).*monte-carlo") as err:
         gb.static_curve_band(q, [1.0, 1e308])
+    assert "band" not in str(err.value).split("monte-carlo")[0]
     mc = gb.static_curve_band(q, [1e308], method="monte-carlo", n_samples=200)
-    assert np.isfinite(mc.ybar_low[0]) and mc.ybar_low[0] < mc.ybar[0] < mc.ybar_high[0]
+    assert np.isfinite(mc.ybar_high[0]) and mc.ybar_low[0] < mc.ybar[0] < mc.ybar_high[0]
+    # a band whose gradient is a float but whose upper end is not: ȳ = b ū / (1 − a) at 0.9995 of the largest float,
+    # its half width some 1e-3 of it (a = −0.2: ∂ȳ/∂a = ȳ / (1 − a) and ∂ȳ/∂b = ū / (1 − a) are floats)
+    q = _first_order(-0.2, 2.0)
+    (a, b) = q.theta
+    ub = 0.9995 * np.finfo(float).max / b * (1 - a)
+    with pytest.raises(ValueError, match=r"the band overflows at ū = .*: the band of ȳ leaves the float range"):
+        gb.static_curve_band(q, [ub])

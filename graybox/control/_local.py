@@ -336,6 +336,11 @@ class LocalModel(Relocked):
         ----------
         input : int or str
             The input, by position in ``input_names`` or by name.
+
+        Returns
+        -------
+        ndarray of complex, shape (<= L_u − 1,)
+            The zeros (none for an input that no term moves).
         """
         self._need()
         row = self.b[self._input_index(input)]
@@ -401,6 +406,11 @@ class LocalModel(Relocked):
             Length of the response.
         input : int or str
             The input stepped, by position or name.
+
+        Returns
+        -------
+        ndarray, shape (n_samples,)
+            Δy(k) in output units for a step of one input unit (deviation from ȳ).
         """
         self._need()
         n = check_count(n_samples, "n_samples", low=1)
@@ -418,6 +428,11 @@ class LocalModel(Relocked):
             Angular frequencies (rad/s), up to the Nyquist frequency π/Ts.
         input : int or str
             The input, by position or name.
+
+        Returns
+        -------
+        ndarray of complex, shape (K,)
+            Output units per input unit.
         """
         self._need()
         w = np.atleast_1d(real_array(omega, "omega", "angular frequencies (numbers, rad/s)"))
@@ -447,6 +462,11 @@ class LocalModel(Relocked):
             The input stepped.
         band : float
             Fraction of the final value (dimensionless, default 0.02).
+
+        Returns
+        -------
+        float
+            Seconds; inf or NaN as said above.
         """
         band = check_real(band, "band", low=0, low_open=True, high=1, high_open=True)
         i = self._input_index(input)
@@ -489,6 +509,11 @@ class LocalModel(Relocked):
         ``input_names`` but the transient inputs (``u_tau30`` …: moving with Δu², they stay at 0 to first order,
         and :func:`graybox.narx_iosystem` computes them), the output ``"y"``. Needs python-control
         (``pip install graybox[control]``).
+
+        Returns
+        -------
+        control.StateSpace
+            n states, one input per input but the transient ones, 1 output; Δu in input units, Δy in output units.
         """
         self._need()
         return local_statespace(self)
@@ -499,6 +524,11 @@ class LocalModel(Relocked):
 
         G_i(z) = Σ_l b_il z^(n−l) / (z^n − Σ_l a_l z^(n−l)), n = max(L_y, L_u), in deviation
         variables. Needs python-control (``pip install graybox[control]``).
+
+        Returns
+        -------
+        control.TransferFunction
+            1 output × one input per input but the transient ones, output units per input unit.
         """
         self._need()
         return local_transfer_function(self)
@@ -989,7 +1019,17 @@ class OperatingCurve(Relocked):
         return self.gain_low is not None
 
     def to_frame(self) -> Any:
-        """One row per operating point (pandas DataFrame): ȳ, gain, τ, ζ, ρ, settling time, status, bands."""
+        """The operating curve as a table.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per operating point (index ``ubar``, or a MultiIndex by input with several inputs; input
+            units): ``ybar`` (output units), ``gain`` (output units per input unit; ``gain <input>`` per input with
+            several), ``time constant`` and ``settling time`` (s; with several inputs ``settling time (<first
+            input> step)``), ``damping``, ``spectral radius``, ``status``, and the bands' columns (``gain low``,
+            ``gain high``, ``time constant low``, ``time constant high``, ``undefined``) when there are bands.
+        """
         import pandas as pd
 
         single = self.ubar.ndim == 1

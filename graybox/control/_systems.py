@@ -109,6 +109,11 @@ def narx_state_names(model: Model, *, noise: bool = False) -> list[str]:
         A polynomial NARX model.
     noise : bool
         As for :func:`narx_iosystem`: the noise lags ``noise[k-1]`` … come last.
+
+    Returns
+    -------
+    list of str
+        One name per state, in the state vector's order.
     """
     model = check_polynomial(model, "narx_state_names")
     noise = check_bool(noise, "noise")

@@ -144,7 +144,13 @@ class DaskRecord:
         return 1
 
     def require_length(self, max_lag: int) -> None:
-        """Raise ``ValueError`` unless the record has more than ``max_lag`` samples."""
+        """Raise ``ValueError`` unless the record has more than ``max_lag`` samples.
+
+        Parameters
+        ----------
+        max_lag : int
+            A structure's largest lag (samples).
+        """
         if len(self) < max_lag + 1:
             raise ValueError(f"record {self.name!r} has {len(self)} samples, fewer than max lag + 1 = {max_lag + 1}")
 

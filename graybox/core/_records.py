@@ -446,7 +446,18 @@ class Record(Relocked):
         return 1 if self.u.ndim == 1 else int(self.u.shape[1])
 
     def input(self, name: str) -> np.ndarray:
-        """The samples of input ``name``, shape (N,) (a read-only view)."""
+        """The samples of one input.
+
+        Parameters
+        ----------
+        name : str
+            One of ``input_names`` (another is refused: ``ValueError`` naming the record's inputs).
+
+        Returns
+        -------
+        ndarray, shape (N,)
+            The input's samples in its own units (a read-only view).
+        """
         if name not in self.input_names:
             raise ValueError(f"{self.name}: no input named {name!r}; its inputs are {self.input_names}")
         return self.u if self.u.ndim == 1 else self.u[:, self.input_names.index(name)]
@@ -470,15 +481,32 @@ class Record(Relocked):
         return np.arange(len(self)) * self.Ts
 
     def slice(self, start: int | None = None, stop: int | None = None, name: str | None = None) -> "Record":
-        """Return the samples ``start:stop`` as a new record named ``name`` (default: this one's name), with
-        the same ``Ts``, units and inputs."""
+        """The samples ``start:stop`` as a new record, with the same ``Ts``, units and inputs.
+
+        Parameters
+        ----------
+        start, stop : int, optional
+            Sample indices, as Python's slice ``start:stop`` reads them (default: from the first, to the last).
+        name : str, optional
+            The new record's name (default: this one's name).
+
+        Returns
+        -------
+        Record
+        """
         # a bool was read as 0 or 1, a float numpy's "slice indices must be integers" naming neither
         start, stop = (None if v is None else check_int(v, f"{self.name}: slice {what}")
                        for what, v in (("start", start), ("stop", stop)))
         return Record(self.u[start:stop], self.y[start:stop], self.Ts, name or self.name, self.units, self.input_names)
 
     def require_length(self, max_lag: int) -> None:
-        """Raise ``ValueError`` unless the record has more than ``max_lag`` samples."""
+        """Raise ``ValueError`` unless the record has more than ``max_lag`` samples.
+
+        Parameters
+        ----------
+        max_lag : int
+            A structure's largest lag (samples).
+        """
         if len(self) < max_lag + 1:
             raise ValueError(
                 f"{self.name}: record has {len(self)} samples, fewer than max lag + 1 = {max_lag + 1}"
@@ -571,7 +599,18 @@ class StaticPoints(Relocked):
             return float(np.mean(self.uncertainty**2))
 
     def with_uncertainty(self, uncertainty: object) -> "StaticPoints":
-        """The same points carrying ``uncertainty`` (δ, output units; one number or one per point)."""
+        """The same points carrying another uncertainty.
+
+        Parameters
+        ----------
+        uncertainty : float or array_like, shape (M,), or None
+            δ, output units (each > 0): one number for every point, or one per point in the order of ``ubar``;
+            None drops it.
+
+        Returns
+        -------
+        StaticPoints
+        """
         return StaticPoints(self.ubar, self.ybar, self.name, self.input_names, uncertainty, self.units)
 
     @classmethod

@@ -235,7 +235,18 @@ class Term:
         return sum(p for _, _, p in self.factors)
 
     def power_of(self, signal: str) -> int:
-        """Total power of ``signal`` in the term (e.g. 2 for ``y`` in ``u(k-1)y(k-2)^2``)."""
+        """Total power of one signal in the term (e.g. 2 for ``y`` in ``u(k-1)y(k-2)^2``).
+
+        Parameters
+        ----------
+        signal : str
+            A signal's name: ``"y"``, ``"e"`` or an input's.
+
+        Returns
+        -------
+        int
+            0 when the term does not hold it.
+        """
         return sum(p for s, _, p in self.factors if s == signal)
 
     @property
@@ -273,7 +284,13 @@ class Term:
         return f"Term({str(self)!r})"
 
     def sort_key(self) -> tuple:
-        """Key ordering terms by degree, then signals and lags (used for candidates)."""
+        """Key ordering terms by degree, then signals and lags (used for candidates).
+
+        Returns
+        -------
+        tuple
+            ``(degree, [(signal's rank, lag, −power), …])``, compared as Python compares tuples.
+        """
         return (self.degree, [(_rank(s), l, -p) for s, l, p in self.factors])
 
 
@@ -407,17 +424,44 @@ class Structure:
         return Structure(self.terms + structure_of(other, "the terms added").terms)
 
     def index(self, term: Term | str) -> int:
-        """Position of ``term`` (a Term or a string) in the structure."""
+        """Position of a term in the structure.
+
+        Parameters
+        ----------
+        term : Term or str
+            A term not in the structure is refused (``ValueError``).
+
+        Returns
+        -------
+        int
+            Its index in ``terms`` (and in a θ of this structure).
+        """
         t = term if isinstance(term, Term) else parse_term(term)
         if t not in self.terms:
             raise ValueError(f"{t} is not in the structure {self}")
         return self.terms.index(t)
 
     def positions(self, terms: Iterable[Term | str], what: str = "term") -> list[int]:
-        """Positions of ``terms`` (Terms or strings) in the structure, in the order given.
+        """Positions of ``terms`` in the structure, in the order given.
 
-        Raises ``ValueError`` naming a term that is not in the structure or is given twice
-        (``what`` names the role of the terms in the message, e.g. ``"included term"``).
+        Parameters
+        ----------
+        terms : sequence of Term or str
+            Terms of the structure, each once.
+        what : str, optional
+            The role of the terms, named in an error message (e.g. ``"included term"``; default ``"term"``).
+
+        Returns
+        -------
+        list of int
+            Each term's index in ``terms`` (and in a θ of this structure).
+
+        Raises
+        ------
+        ValueError
+            A term that is not in the structure or is given twice (named).
+        TypeError
+            ``terms`` not a sequence, or an item neither a Term nor a string.
         """
         out: list[int] = []
         if isinstance(terms, (str, Term)) or not hasattr(terms, "__iter__"):
@@ -456,7 +500,18 @@ class Structure:
     inputs = RenamedAttribute("input_names")
 
     def input_lag(self, name: str) -> int:
-        """Largest lag of input ``name`` over the terms (0 when no term uses it)."""
+        """Largest lag of one input over the terms.
+
+        Parameters
+        ----------
+        name : str
+            An input's name.
+
+        Returns
+        -------
+        int
+            Samples; 0 when no term uses it.
+        """
         return max((l for t in self.terms for s, l, _ in t.factors if s == name), default=0)
 
     @property
@@ -542,6 +597,11 @@ def parse_structure(text: str | Sequence[str]) -> Structure:
     ----------
     text : str or sequence of str
         Terms joined by ``+``, or one string per term.
+
+    Returns
+    -------
+    Structure
+        The terms in the order given.
     """
     if isinstance(text, str):
         parts = text.split("+")

@@ -449,7 +449,7 @@ def _unbracket(cell: str) -> str:
 
 #: The units of elapsed time a units row or the time column's name may give a time column of numbers: (multiply,
 #: divide) that make them seconds (a division by 1000 rounds 1010 ms to the float nearest 1.01 s, where a product with
-#: 1e-3 rounds twice). Every unit of :data:`_OTHER_UNITS` is here.
+#: 1e-3 rounds twice). A name's units (:data:`_OTHER_UNITS`) are this table's.
 _TIME_UNITS = {**dict.fromkeys(("", "s", "sec", "secs", "second", "seconds"), (1, 1)),
                **dict.fromkeys(("ms", "msec", "millis", "millisecond", "milliseconds"), (1, 1000)),
                **dict.fromkeys(("us", "µs", "μs", "usec", "micros", "microsecond", "microseconds"), (1, 10**6)),
@@ -459,17 +459,41 @@ _TIME_UNITS = {**dict.fromkeys(("", "s", "sec", "secs", "second", "seconds"), (1
                **dict.fromkeys(("d", "day", "days"), (86400, 1))}
 
 
-def _time_in_seconds(p: Path, unit: str, t: np.ndarray, stamps: Sequence[str] | None,
+#: The spellings of :data:`_TIME_UNITS` whose letters' case names another unit (a capital M is mega, ``Ms`` and ``MS``
+#: megaseconds; ``S`` is siemens, ``H`` henry): read as written only. The words (``sec``, ``min``, ``hours`` …) name
+#: no other unit in any case, and are read in any (``Sec``, ``MIN``).
+_CASED_TIME_UNITS = frozenset({"s", "ms", "msec", "us", "µs", "μs", "usec", "ns", "nsec", "h", "d"})
+
+
+def _time_unit(p: Path, unit: str, col: str) -> tuple[int, int] | None:
+    """(multiply, divide) that make the time column ``col``'s numbers in ``unit`` seconds (:data:`_TIME_UNITS`), None
+    for a unit it does not list; a symbol written in another case (``Ms``, ``MS``, ``S``) is refused as ambiguous,
+    naming the column (it read as ``ms``, milliseconds, where ``Ms`` is megaseconds)."""
+    key = unit.strip()
+    if key in _TIME_UNITS:
+        return _TIME_UNITS[key]
+    low = key.lower()
+    if low in _CASED_TIME_UNITS:
+        raise ValueError(f"{p}: the time column {col!r} is given the unit {unit!r}, which differs from {low!r} only by "
+                         "case: ambiguous, as a unit's case is part of its name ('Ms' and 'MS' are megaseconds, 'S' "
+                         f"siemens); write {low!r} if it is meant, or leave time= out and give Ts= in seconds")
+    return _TIME_UNITS.get(low)
+
+
+def _time_in_seconds(p: Path, unit: str, t: np.ndarray, stamps: Sequence[str] | None, col: str,
                      source: str = "the units row gives the time column") -> np.ndarray:
-    """The numbers of a time column whose units row (or name: ``source`` says which, for the messages) gives
-    ``unit`` as seconds (``ms``, ``µs``/``us``, ``ns``, ``min``, ``h``, ``d`` converted); dates and clock times
-    (``stamps`` not None) carry their own unit: a units row giving them one other than seconds (or ``TS``, a TOA5
-    file's TIMESTAMP) is refused, as is an unknown unit."""
-    key = unit.strip().lower()
-    if key == "ts" or (stamps is not None and _TIME_UNITS.get(key) == (1, 1)):
+    """The numbers of the time column ``col`` whose units row (or name: ``source`` says which, for the messages)
+    gives ``unit`` as seconds (``ms``, ``µs``/``us``, ``ns``, ``min``, ``h``, ``d`` converted; a symbol in another
+    case, ``Ms`` or ``MS``, refused by :func:`_time_unit`); dates and clock times (``stamps`` not None) carry their
+    own unit: a units row giving them one other than seconds (or ``TS``, a TOA5 file's TIMESTAMP) is refused, as is
+    an unknown unit."""
+    if unit.strip().lower() == "ts":
         return t
-    if stamps is None and key in _TIME_UNITS:
-        mul, div = _TIME_UNITS[key]
+    scale = _time_unit(p, unit, col)
+    if stamps is not None and scale == (1, 1):
+        return t
+    if stamps is None and scale is not None:
+        mul, div = scale
         return t * mul if div == 1 else t / div
     known = "s, ms, µs (us), ns, min, h or d"
     said = (f"the time column holds dates or clock times ({stamps[0]!r}), which carry their own unit"
@@ -1180,7 +1204,9 @@ def load_record_csv(
         as data loggers write: it becomes the record's ``units`` (inputs in units of their own keep
         one each, ``(("rpm", "%"), "Pa")``; a ``units=`` that contradicts it is refused; a time
         column of numbers in ``ms``, ``µs`` (``us``), ``ns``, ``min``, ``h`` or ``d`` is converted to seconds, one
-        of dates or clock times must say ``s`` or nothing). Without it such a line is refused, naming this option.
+        of dates or clock times must say ``s`` or nothing; a symbol is read in its own case only, ``Ms`` or ``MS``
+        refused as ambiguous, words such as ``Sec`` or ``MIN`` in any). Without it such a line is refused, naming
+        this option.
         Default False, True for a TOA5 file (where ``False`` is refused).
 
     Returns
@@ -1248,12 +1274,12 @@ def _time_column_seconds(p: Path, col: str, t: np.ndarray, row: dict[str, str] |
     named = _TIME_UNIT.search(col)
     said = "" if row is None else row.get("time", "")
     if named is None or named.group(1) is None:
-        return t if row is None else _time_in_seconds(p, said, t, stamps)
+        return t if row is None else _time_in_seconds(p, said, t, stamps, col)
     unit = named.group(1)
-    if said.strip() and _TIME_UNITS.get(said.strip().lower()) != _TIME_UNITS[unit.lower()]:
+    if said.strip() and _time_unit(p, said, col) != _time_unit(p, unit, col):
         raise ValueError(f"{p}: column {col!r} names its unit {unit!r}, but the units row gives it {said!r}: correct "
                          "the one that is wrong")
-    return _time_in_seconds(p, unit, t, stamps, source=f"column {col!r} names")
+    return _time_in_seconds(p, unit, t, stamps, col, source=f"column {col!r} names")
 
 
 def _wanted(ucols: Sequence[str], y: str, **more: str | None) -> dict[str, str]:
@@ -1304,8 +1330,9 @@ _TICK_POWER = (r"(?:e[-+−]?\d+|(?:\s*[·*×x]\s*10)?\s*(?:\^|\*\*)\s*[-+−]?\
                r"|(?:\s*[·*×x]\s*10)?\s*[⁻⁺]?[⁰¹²³⁴⁵⁶⁷⁸⁹]+)")
 _TICK_FRACTION = r"(?:\s*/\s*" + _TICK_NUMBER + _TICK_POWER + "?)"
 #: the units other than seconds a name may give, bare ("t [h]") or with a tick's number ("t [2h]")
-_OTHER_UNITS = (r"ms|msec|millis(?:econds?)?|us|µs|μs|usec|micros(?:econds?)?|ns|min|mins|minutes?|h|hr|hrs|hours?|d|"
-                r"days?")
+#: (:data:`_TIME_UNITS`' own, not a list of its own: the table's nsec and nanoseconds, missing here, read as seconds)
+_OTHER_UNITS = "|".join(re.escape(k) for k in sorted((k for k, v in _TIME_UNITS.items() if v != (1, 1)), key=len,
+                                                     reverse=True))
 _TICK_UNIT = rf"(?:s|secs?|seconds?|{_OTHER_UNITS})"
 _TIME_UNIT = re.compile(rf"(?:[\[(]\s*|[_/ -])({_OTHER_UNITS})\s*[\])]?\s*$"
                         # a tick of a PLC or logger: "Zeit [10ms]", "t (0.1 s)", "t [1/10 s]", "t [1e-3 s]", "t [10^-3 s]",
@@ -1814,6 +1841,15 @@ def pumping_data_dir() -> Path:
     An installed package carries them as package data ``graybox/data/pumping`` (mapped from the
     repository's ``data/pumping`` by pyproject.toml); a source checkout (or an editable install)
     reads ``<repo>/data/pumping`` directly.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    FileNotFoundError
+        Neither place holds the data (both named).
     """
     return bundled_data_dir("pumping", "the bundled pumping data", "graybox.datasets.pumping")
 
@@ -1921,6 +1957,11 @@ def find_buck_dir(path: str | os.PathLike | None = None) -> Path:
     ----------
     path : str or path-like, optional
         The folder to use.
+
+    Returns
+    -------
+    pathlib.Path
+        The folder found.
 
     Raises
     ------

@@ -30,6 +30,15 @@ def pumping_miso_data_dir() -> Path:
 
     An installed package carries them as package data ``graybox/data/pumping_miso``; a source
     checkout (or an editable install) reads ``<repo>/data/pumping_miso``.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    FileNotFoundError
+        Neither place holds the data (both named).
     """
     return bundled_data_dir("pumping_miso", "the bundled two-input pumping data", "graybox.datasets._pumping_miso")
 

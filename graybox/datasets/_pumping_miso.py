@@ -156,6 +156,11 @@ class TwoSpeedRun(Relocked):
         ----------
         name : str
             The record's name.
+
+        Returns
+        -------
+        Record
+            N samples at ``Ts``, inputs ``u1``, ``u2`` (rpm), output the pressure (mlc).
         """
         return Record(self.u, self.y, Ts=self.Ts, name=name, units=("rpm", "mlc"), input_names=("u1", "u2"))
 
@@ -210,11 +215,20 @@ class TwoSpeedPumpingPlant:
         return n1, n2
 
     def steady_flows(self, speed1: np.ndarray | float, speed2: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
-        """Equilibrium flow through each pump (L/s) at constant speeds ``speed1``, ``speed2`` (rpm); arrays of the
-        broadcast shape.
+        """Equilibrium flow through each pump set at constant speeds.
 
         Solved by bisection on the total flow to the last bit (the balance falls strictly with Q);
         a pump whose valve stays shut delivers 0.
+
+        Parameters
+        ----------
+        speed1, speed2 : float or array_like, shapes that broadcast together
+            Constant speed references of the two pump sets (rpm), within the rig's ``speed_range``.
+
+        Returns
+        -------
+        q1, q2 : ndarray, the broadcast shape
+            Flows (L/s).
         """
         n1, n2 = self._check_speeds(speed1, speed2)
         c = self._consts()
@@ -225,15 +239,35 @@ class TwoSpeedPumpingPlant:
         return q1, q2
 
     def steady_flow(self, speed1: np.ndarray | float, speed2: np.ndarray | float) -> np.ndarray:
-        """Equilibrium total flow Q̄ (L/s) at constant speeds ``speed1``, ``speed2`` (rpm)."""
+        """Equilibrium total flow Q̄ at constant speeds.
+
+        Parameters
+        ----------
+        speed1, speed2 : float or array_like, shapes that broadcast together
+            Constant speed references of the two pump sets (rpm), within the rig's ``speed_range``.
+
+        Returns
+        -------
+        ndarray, the broadcast shape
+            Flow (L/s).
+        """
         q1, q2 = self.steady_flows(speed1, speed2)
         return q1 + q2
 
     def static_pressure(self, speed1: np.ndarray | float, speed2: np.ndarray | float) -> np.ndarray:
-        """The theoretical static surface p̄(n̄₁, n̄₂) = H_t(Q̄) (mlc) at speeds ``speed1``, ``speed2`` (rpm),
-        noise-free; broadcast shape.
+        """The theoretical static surface p̄(n̄₁, n̄₂) = H_t(Q̄), noise-free.
 
         Equals eq. (1) at n̄₁ = n̄₂; see the module docs ("Static surface").
+
+        Parameters
+        ----------
+        speed1, speed2 : float or array_like, shapes that broadcast together
+            Constant speed references of the two pump sets (rpm), within the rig's ``speed_range``.
+
+        Returns
+        -------
+        ndarray, the broadcast shape
+            Pressure (mlc).
         """
         q = self.steady_flow(speed1, speed2)
         c = self._consts()
@@ -245,7 +279,12 @@ class TwoSpeedPumpingPlant:
         Parameters
         ----------
         domain : ((float, float), (float, float)), optional
-            Box of (n̄₁, n̄₂) the surface is drawn over; default ``OPERATING_RANGE`` for both.
+            Box of (n̄₁, n̄₂) the surface is drawn over (rpm); default ``OPERATING_RANGE`` for both.
+
+        Returns
+        -------
+        PlantSurface
+            Called on ū of shape (K, 2) (rpm), it gives p̄ of shape (K,) (mlc).
         """
         box = (OPERATING_RANGE, OPERATING_RANGE) if domain is None else self._check_domain(domain)
         return PlantSurface(self, tuple((float(lo), float(hi)) for lo, hi in box))
@@ -269,7 +308,19 @@ class TwoSpeedPumpingPlant:
         return tuple(out)  # type: ignore[return-value]
 
     def steady_state(self, speed1: float, speed2: float) -> tuple[float, float, float, float, float]:
-        """Equilibrium state (n_c1, n_1, n_c2, n_2, Q) at constant references ``speed1``, ``speed2`` (rpm)."""
+        """Equilibrium state at constant references.
+
+        Parameters
+        ----------
+        speed1, speed2 : float
+            One speed reference of each pump set (rpm), within the rig's ``speed_range``.
+
+        Returns
+        -------
+        (float, float, float, float, float)
+            (n_c1, n_1, n_c2, n_2, Q): each set's drive and rotor speeds (rpm), each the reference, and the total
+            flow (L/s).
+        """
         n1, n2 = self._check_speeds(speed1, speed2)
         if n1.size != 1:  # (arrays of speeds failed in numpy's words: 'only length-1 arrays can be converted')
             raise ValueError(f"steady_state takes one speed of each pump set (rpm), got speeds of shape {n1.shape}; "
@@ -518,6 +569,11 @@ def two_speed_reference(*, n_samples: int = N_SAMPLES_MISO, n_ident: int = N_IDE
         Seed of both columns' streams (default 2011, the bundled records').
     low, high : float
         The speed range of each pump set (rpm), 0 < low < high; default 1150–1650.
+
+    Returns
+    -------
+    ndarray, shape (n_samples, 2)
+        One speed reference (rpm) per pump set.
     """
     n_samples, n_ident, seed = reference_lengths(n_samples, n_ident, seed)
     low, high = check_real(low, "low (rpm)", low=0, low_open=True), check_real(high, "high (rpm)")

@@ -299,7 +299,18 @@ class PlantRun(Relocked):
             object.__setattr__(self, name, locked(a))  # a run is a value: nobody edits it in place
 
     def record(self, name: str = "pumping") -> Record:
-        """The measured input/output pair as a :class:`~graybox.Record` (rpm, mlc) named ``name``."""
+        """The measured input/output pair as a :class:`~graybox.Record`.
+
+        Parameters
+        ----------
+        name : str, optional
+            The record's name (default ``"pumping"``).
+
+        Returns
+        -------
+        Record
+            u the speed reference (rpm), y the pressure (mlc), N samples at ``Ts``.
+        """
         return Record(self.u, self.y, Ts=self.Ts, name=name, units=("rpm", "mlc"))
 
     __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
@@ -451,13 +462,35 @@ class PumpingPlant:
 
     # -- statics ------------------------------------------------------------
     def static_pressure(self, speed: np.ndarray | float) -> np.ndarray:
-        """The curve the rig is calibrated to, H(ū) = β ū² + α ū + κ (mlc), same shape as ``speed``."""
+        """The curve the rig is calibrated to, H(ū) = β ū² + α ū + κ.
+
+        Parameters
+        ----------
+        speed : float or array_like, any shape
+            Constant speed references ū (rpm), finite and within ``speed_range``.
+
+        Returns
+        -------
+        ndarray, the shape of ``speed``
+            Pressure (mlc).
+        """
         k, a, b = self.static_coefficients
         n = self._speeds(speed)
         return b * n**2 + a * n + k
 
     def steady_flow(self, speed: np.ndarray | float) -> np.ndarray:
-        """Equilibrium flow Q̄ (L/s) at constant speed ū (rpm): R Q̄² = (h_0 − β) ū² − α ū − κ."""
+        """Equilibrium flow Q̄ at constant speed ū: R Q̄² = (h_0 − β) ū² − α ū − κ.
+
+        Parameters
+        ----------
+        speed : float or array_like, any shape
+            Constant speed references ū (rpm), finite and within ``speed_range``.
+
+        Returns
+        -------
+        ndarray, the shape of ``speed``
+            Flow (L/s).
+        """
         k, a, b = self.static_coefficients
         n = self._speeds(speed)
         return np.sqrt(((self.shutoff_head - b) * n**2 - a * n - k) / self.loss)
@@ -502,6 +535,16 @@ class PumpingPlant:
 
         Below the flow Q_j of the lowest reference of ``speed_range`` (24.2 L/s for the default
         plant) it continues as H_j (Q/Q_j)^m down to H_t(0) = 0 (module docs, "Low flow").
+
+        Parameters
+        ----------
+        flow : float
+            Q (L/s), >= 0.
+
+        Returns
+        -------
+        float
+            Head (mlc).
         """
         # float() parsed '3' and took True; a 0-d array is one number, as check_real (and steady_state) take it
         q = check_real(flow, "flow (L/s)")
@@ -513,7 +556,18 @@ class PumpingPlant:
         return self._calibrated_head(q)
 
     def steady_state(self, speed: float) -> tuple[float, float, float]:
-        """Equilibrium state (n_c, n, Q) at constant reference ``speed`` (rpm), within ``speed_range``."""
+        """Equilibrium state at a constant reference.
+
+        Parameters
+        ----------
+        speed : float
+            The speed reference (rpm), within ``speed_range``.
+
+        Returns
+        -------
+        (float, float, float)
+            (n_c, n, Q): the drive's and the rotor's speeds (rpm), both the reference, and the flow (L/s).
+        """
         # the calibrated formula of steady_flow is no equilibrium below speed_range[0] (the turbine's low-flow branch
         # takes over there), and text is no speed: one speed as simulate takes it
         s = self._one_speed(speed, "speed")
@@ -750,6 +804,11 @@ class PumpingPlant:
         ----------
         speed : float
             Operating reference (rpm).
+
+        Returns
+        -------
+        float
+            Seconds.
         """
         A, _, _ = self.linearize(speed)
         return float(-self.Ts / np.log(np.max(np.abs(np.linalg.eigvals(A)))))
@@ -761,6 +820,21 @@ class PumpingPlant:
         The step of ``step`` rpm is applied at a settled ``speed``; the time is counted from the
         step instant (so it includes the dead time and the drive and rotor lags), over a run of
         ``horizon`` seconds after it.
+
+        Parameters
+        ----------
+        speed : float
+            The settled reference before the step (rpm), within ``speed_range``.
+        step : float, optional
+            The step (rpm), nonzero, ``speed + step`` within ``speed_range`` too (default 20).
+        horizon : float, optional
+            Seconds simulated after the step, > 0 (default 15); a response that does not settle within it is
+            refused (``ValueError``).
+
+        Returns
+        -------
+        float
+            Seconds.
         """
         speed = self._one_speed(speed, "speed")  # text was concatenated with the step ('can only concatenate str')
         step = check_real(step, "step (rpm)")
@@ -793,6 +867,18 @@ class PumpingPlant:
         The slow surge and air disturbances are left out: they are excited only by speed changes
         and :func:`static_experiment` waits them out (their effect on a settled mean is under
         0.001 mlc, against about 0.03 mlc from the two terms above).
+
+        Parameters
+        ----------
+        speed : float
+            The settled reference (rpm), within ``speed_range``.
+        n_samples : int
+            Measurements averaged, >= 1.
+
+        Returns
+        -------
+        float
+            Standard deviation of the mean (mlc).
         """
         n = self._one_speed(speed, "speed")
         n_samples = check_count(n_samples, "n_samples", low=1)
@@ -942,6 +1028,11 @@ def speed_reference(*, n_samples: int = N_SAMPLES, n_ident: int = N_IDENT, seed:
         Seed of the random levels and holds (default 2011, the bundled records').
     low, high : float
         The speed range (rpm), 0 < low; default 750–1650.
+
+    Returns
+    -------
+    ndarray, shape (n_samples,)
+        The speed reference (rpm).
     """
     n_samples, n_ident, seed = reference_lengths(n_samples, n_ident, seed)
     rng = np.random.default_rng([seed, 1])

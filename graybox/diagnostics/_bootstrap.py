@@ -317,9 +317,14 @@ class DecisionBootstrap(Relocked):
         return float(np.mean(self.lambda1[self.ok] == ref))
 
     def frequencies(self) -> pd.DataFrame:
-        """How often each λ1 was chosen: ``count`` and ``fraction`` of the successful replicates, by λ1.
+        """How often each λ1 was chosen.
 
-        The reference decision's λ1 is listed (``reference`` True) even when no replicate chose it.
+        Returns
+        -------
+        pandas.DataFrame
+            One row per λ1 (index ``lambda1``, ascending): ``count`` and ``fraction`` of the successful replicates
+            that chose it, and ``reference`` (True for the reference decision's λ1, listed even when no replicate
+            chose it).
         """
         import pandas as pd
 
@@ -335,10 +340,17 @@ class DecisionBootstrap(Relocked):
         return df
 
     def summary(self) -> pd.DataFrame:
-        """The spread of the chosen member's J_S and J_SF: reference, median, 5 % and 95 % quantiles and std over
-        the replicates whose J is finite, and ``infinite``: how many replicates' chosen member has an infinite J
-        (a free run that diverged, a static curve with no equilibrium: ``fallback="min_jsf"`` can choose such a
-        member), left out of the others."""
+        """The spread of the chosen member's J_S and J_SF.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Rows ``JS`` and ``JSF``; columns ``reference``, ``median``, ``q05``, ``q95`` (5 % and 95 % quantiles)
+            and ``std`` over the replicates whose J is finite (all in output units²), ``infinite``:
+            how many replicates' chosen member has an infinite J (a free run that diverged, a static curve with no
+            equilibrium: ``fallback="min_jsf"`` can choose such a member), left out of the others, and
+            ``in band``: the fraction of the successful replicates whose choice is in the band.
+        """
         import pandas as pd
 
         rows = {}
@@ -354,7 +366,15 @@ class DecisionBootstrap(Relocked):
         return rows_df
 
     def to_frame(self) -> pd.DataFrame:
-        """One row per replicate: λ1, J_S, J_SF, in band, rule, failure."""
+        """The replicates as a table.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per replicate (index ``replicate``): ``lambda1``, ``JS``, ``JSF`` (output units²), ``in band``,
+            ``rule`` (``"D_SF"`` or ``"min J_SF"``, the rule that chose; ``""`` when it failed) and ``failure``
+            (the reason, ``""`` for a replicate that did not fail).
+        """
         import pandas as pd
 
         return pd.DataFrame({"lambda1": self.lambda1, "JS": self.JS, "JSF": self.JSF, "in band": self.in_band,

@@ -19,6 +19,7 @@ from ..core._records import check_units, said_units
 from ..core._simulation import simulate_many
 from ..core._simulation_kernels import encode, free_run_sensitivity_blocks, input_products, record_inputs
 from ..core._reprs import share_text
+from ..core._terms import check_input_names
 from ..core._validation import (Relocked, check_count, check_band_finite, check_band_values, check_choice, check_fields,
                                 check_level, check_real, check_seed, frozen, warn)
 from ..models._coerce import as_record
@@ -59,7 +60,11 @@ class SimulationBand(Relocked):
         band, and said by an :class:`UncertaintyWarning`); 0 for the delta method.
     model_name, record_name : str
     units : tuple of str
-        The (input, output) units: the record's, the model's where the record names none.
+        The (input, output) units: the record's, the model's where the record names none. Inputs in units of their
+        own give one unit per input, of :attr:`input_names`.
+    input_names : tuple of str, optional
+        The record's inputs, which per-input units are of (:func:`simulation_band` gives them; None: not known, as
+        in a file written before they were kept, and then per-input units are not counted).
     """
 
     t: np.ndarray
@@ -75,6 +80,7 @@ class SimulationBand(Relocked):
     model_name: str = ""
     record_name: str = ""
     units: tuple[str | tuple[str, ...], str] = ("", "")
+    input_names: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
         check_fields(self)
@@ -84,7 +90,10 @@ class SimulationBand(Relocked):
             if a.shape != (N,):
                 raise ValueError(f"{f} must have shape ({N},), got {a.shape}")
             object.__setattr__(self, f, a)
-        object.__setattr__(self, "units", check_units(self.units, "SimulationBand"))  # ("rpm", 3) is no unit
+        if self.input_names is not None:
+            object.__setattr__(self, "input_names", check_input_names(self.input_names, what="input_names"))
+        m = None if self.input_names is None else len(self.input_names)
+        object.__setattr__(self, "units", check_units(self.units, "SimulationBand", m))  # ("rpm", 3) is no unit
         # a value read from a hand-edited file is held to what the band can be
         check_level(self.level)
         check_real(self.diverged, "diverged", low=0, high=1)
@@ -118,7 +127,14 @@ class SimulationBand(Relocked):
         return float(np.mean((self.y[k] >= self.low[k]) & (self.y[k] <= self.high[k])))
 
     def to_frame(self) -> pd.DataFrame:
-        """One row per sample: measured y, the free run ŷ, the band and the std, indexed by time (s)."""
+        """The band as a table.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per sample (index ``t``, s): ``y`` (measured), ``yhat`` (the free run), ``low``, ``high`` and
+            ``std``, output units.
+        """
         import pandas as pd
 
         return pd.DataFrame({"y": self.y, "yhat": self.yhat, "low": self.low, "high": self.high, "std": self.std},
@@ -212,7 +228,7 @@ def simulation_band(
         std = np.sqrt(var)
         h = uncertainty.quantile * std  # Student's t, as the parameters' intervals: σ² is estimated
         return SimulationBand(rec.t, rec.y, yhat, yhat - h, yhat + h, std, uncertainty.level, "delta", 0, 0.0,
-                              m.name, rec.name, units)
+                              m.name, rec.name, units, rec.input_names)
     # the runs (n_samples × N), the bounded ones' copy and the quantiles' and spread's working copies: refused
     # before allocation where they would not fit (a long record's band by draws), as the long-record paths refuse
     require_memory(3 * 8 * n_samples * N, f"simulation_band's {n_samples} Monte Carlo free runs of {N} samples",
@@ -241,4 +257,4 @@ def simulation_band(
     # deviation times its draw's weight, the normal draw's (the multivariate t has no variance at dof <= 2)
     std = (w[ok, None] * (Y[ok] - own)).std(axis=0)
     return SimulationBand(rec.t, rec.y, yhat, low, high, std, uncertainty.level, "monte-carlo",
-                          n_samples, diverged, m.name, rec.name, units)
+                          n_samples, diverged, m.name, rec.name, units, rec.input_names)

@@ -245,18 +245,40 @@ class ParameterUncertainty(Relocked):
             object.__setattr__(self, "cov_factor", frozen(_canonical_factor(F, self.model.structure, A)))
 
     def contract(self, G: np.ndarray) -> np.ndarray:
-        """The variances gᵀ cov g of the linear functions g of θ in the rows of ``G`` (shape (M, n_terms)),
-        shape (M,): ‖F g‖² through :attr:`cov_factor` where there is one (accurate to eps × cond of the
-        estimate's scaled problem, where contracting ``cov`` is accurate to eps × cond²)."""
+        """The variances gᵀ cov g of the linear functions g of θ in the rows of ``G``: ‖F g‖² through
+        :attr:`cov_factor` where there is one (accurate to eps × cond of the estimate's scaled problem, where
+        contracting ``cov`` is accurate to eps × cond²).
+
+        Parameters
+        ----------
+        G : ndarray, shape (M, n_terms), or (n_terms,) for one
+            Each row a linear function g of θ (engineering units).
+
+        Returns
+        -------
+        ndarray, shape (M,)
+            Each >= 0, in the units of gᵀθ, squared.
+        """
         G = np.atleast_2d(np.asarray(G, float))
         if self.cov_factor is not None:
             return np.einsum("ij,ij->i", G @ self.cov_factor.T, G @ self.cov_factor.T)
         return np.clip(np.einsum("ij,jk,ik->i", G, self.cov, G), 0, None)
 
     def std_of(self, G: np.ndarray) -> np.ndarray:
-        """The standard deviations √(gᵀ cov g) of the rows of ``G`` (shape (M, n_terms)), shape (M,): each row over
-        the power of two above its largest |entry| (exact), so that a deviation within the float range is one where
-        its variance is not (a static curve's at ū = 1e200, about 1e198, read inf through its variance 1e396)."""
+        """The standard deviations √(gᵀ cov g) of the rows of ``G``: each row over the power of two above its
+        largest |entry| (exact), so that a deviation within the float range is one where its variance is not (a
+        static curve's at ū = 1e200, about 1e198, read inf through its variance 1e396).
+
+        Parameters
+        ----------
+        G : ndarray, shape (M, n_terms), or (n_terms,) for one
+            Each row a linear function g of θ (engineering units).
+
+        Returns
+        -------
+        ndarray, shape (M,)
+            Each >= 0, in the units of gᵀθ (NaN for a row with an infinite entry).
+        """
         G = np.atleast_2d(np.asarray(G, float))
         e = binary_exponent(np.max(np.abs(G), axis=1, initial=0.0))
         # a gradient beyond the float range (inf) gives NaN here, which the bands name (_refuse_overflow)
@@ -298,8 +320,18 @@ class ParameterUncertainty(Relocked):
             return self.cov / np.outer(s, s)
 
     def covers(self, theta: np.ndarray) -> np.ndarray:
-        """Which components of ``theta`` (shape (n_terms,), finite) lie in their interval, shape (n_terms,) bool (to the
-        round-off of the estimate: a constrained parameter's interval has zero width)."""
+        """Which components of ``theta`` lie in their interval (to the round-off of the estimate: a constrained
+        parameter's interval has zero width).
+
+        Parameters
+        ----------
+        theta : ndarray, shape (n_terms,)
+            Finite parameters, engineering units (e.g. the true ones of a simulated plant).
+
+        Returns
+        -------
+        ndarray of bool, shape (n_terms,)
+        """
         th = np.asarray(theta, float)
         if th.shape != self.theta.shape:
             raise ValueError(f"theta must have shape {self.theta.shape} (one value per term), got {th.shape}")
@@ -313,13 +345,29 @@ class ParameterUncertainty(Relocked):
         return (th >= iv[:, 0] - slack) & (th <= iv[:, 1] + slack)
 
     def with_level(self, level: float) -> "ParameterUncertainty":
-        """The same covariance with intervals at another confidence level."""
+        """The same covariance with intervals at another confidence level.
+
+        Parameters
+        ----------
+        level : float
+            Confidence level, in (0, 1) (e.g. 0.95).
+
+        Returns
+        -------
+        ParameterUncertainty
+        """
         level = check_level(level)
         return ParameterUncertainty(self.model, self.cov, level, self.dof, self.sigma2, self.method,
                                     self.constraints, self.noise_cov, self.static_sigma2, self.cov_factor)
 
     def cluster_cov(self) -> np.ndarray:
-        """Covariance of the cluster coefficients Σ = Rθ, shape (n_clusters, n_clusters)."""
+        """Covariance of the cluster coefficients Σ = Rθ.
+
+        Returns
+        -------
+        ndarray, shape (n_clusters, n_clusters)
+            R cov Rᵀ, in the clusters' units (products of their pairs'), clusters in ``cluster_map()`` order.
+        """
         R = self.model.cluster_map().R
         if self.cov_factor is not None:
             FR = self.cov_factor @ R.T
@@ -327,7 +375,14 @@ class ParameterUncertainty(Relocked):
         return R @ self.cov @ R.T
 
     def cluster_frame(self) -> pd.DataFrame:
-        """One row per cluster: Σ, its standard deviation and interval (a constrained cluster has 0)."""
+        """The clusters' estimates and their uncertainty as a table.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per cluster (index ``cluster``, its name): ``value`` (Σ), ``std`` (0 for a constrained
+            cluster), ``low`` and ``high`` (the interval at :attr:`level`), in the cluster's units.
+        """
         import pandas as pd
 
         cm = self.model.cluster_map()
@@ -338,7 +393,14 @@ class ParameterUncertainty(Relocked):
                             index=pd.Index(cm.names, name="cluster"))
 
     def to_frame(self) -> pd.DataFrame:
-        """One row per term: θ, std, interval, relative std (std / |θ|)."""
+        """The parameters' estimates and their uncertainty as a table.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per term (index ``term``): ``theta``, ``std``, ``low`` and ``high`` (the interval at
+            :attr:`level`), in the parameter's engineering units, and ``rel std`` (std / |θ|, dimensionless).
+        """
         import pandas as pd
 
         iv = self.intervals
@@ -1489,12 +1551,21 @@ class StaticCurveBand(Relocked):
 
     def __post_init__(self) -> None:
         check_fields(self)
-        object.__setattr__(self, "units", check_units(self.units, "StaticCurveBand"))
+        object.__setattr__(self, "units", check_units(self.units, "StaticCurveBand", 1))  # a curve is of one input
         M = np.shape(self.ubar)[0]
         _check_static_band(self, (M,), (M,))
 
     def to_frame(self) -> pd.DataFrame:
-        """One row per ū: ȳ, its band and std, the gain, its band and std (and the undefined fraction)."""
+        """The band as a table.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per ū (index ``ubar``, input units): ``ybar``, ``ybar low``, ``ybar high``, ``ybar std`` (output
+            units), ``gain``, ``gain low``, ``gain high``, ``gain std`` (output units per input unit) and
+            ``undefined`` (the fraction of Monte Carlo draws without a stable equilibrium near the
+            estimate's there, left out of the band; 0 for the delta method).
+        """
         import pandas as pd
 
         return pd.DataFrame({"ybar": self.ybar, "ybar low": self.ybar_low, "ybar high": self.ybar_high,
@@ -1553,9 +1624,9 @@ class StaticSurfaceBand(Relocked):
 
     def __post_init__(self) -> None:
         check_fields(self)
-        object.__setattr__(self, "units", check_units(self.units, "StaticSurfaceBand"))
         # a name given twice would merge two inputs' gain columns in to_frame
         object.__setattr__(self, "input_names", check_input_names(self.input_names, what="input_names"))
+        object.__setattr__(self, "units", check_units(self.units, "StaticSurfaceBand", len(self.input_names)))
         ub = frozen(self.ubar)
         m = len(self.input_names)
         if ub.ndim != 2 or ub.shape[1] != m:
@@ -1564,8 +1635,17 @@ class StaticSurfaceBand(Relocked):
         _check_static_band(self, (ub.shape[0],), ub.shape)
 
     def to_frame(self) -> pd.DataFrame:
-        """One row per point (indexed by the inputs' levels): ȳ, its band and std, each input's gain with its band
-        and std (columns ``gain <name>``, ``gain <name> low`` …) and the undefined fraction."""
+        """The band as a table.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per point (a MultiIndex of the inputs' levels, named by the inputs): ``ybar``, ``ybar low``,
+            ``ybar high``, ``ybar std`` (output units), each input's gain with its band and std (columns
+            ``gain <name>``, ``gain <name> low``, ``gain <name> high``, ``gain <name> std``; output units per that
+            input's unit) and ``undefined`` (the fraction of Monte Carlo draws without a stable equilibrium near the
+            estimate's there, left out of the band; 0 for the delta method).
+        """
         import pandas as pd
 
         cols: dict[str, np.ndarray] = {"ybar": self.ybar, "ybar low": self.ybar_low, "ybar high": self.ybar_high,
@@ -1638,12 +1718,22 @@ def _scaled_nanstd(D: np.ndarray) -> np.ndarray:
 
 
 def _refuse_overflow(ub: np.ndarray, yb: np.ndarray, hy: np.ndarray, gain: np.ndarray, hg: np.ndarray,
-                     drawn: bool) -> None:
+                     drawn: bool, gradients: tuple[np.ndarray, np.ndarray] | None = None) -> None:
     """``ValueError`` naming the first level ``ub`` (M,) or point (M, m) where the band of ȳ (``yb`` ± ``hy``, its
     half width or spread) or of a gain (``gain`` ± ``hg``) leaves the float range: said as that, not as a band whose
-    ends are not finite numbers. ``drawn`` (Monte Carlo): a NaN spread is no draw kept there, no overflow; the
-    delta method's NaN is a gradient beyond the float range (∞ − ∞ in its contraction)."""
+    ends are not finite numbers. ``drawn`` (Monte Carlo): a NaN spread is no draw kept there, no overflow.
+    ``gradients``: the delta method's of ȳ (M, n) and of the gains (M, …, n); where one leaves the float range (its
+    spread then NaN or inf) that is said, not the band, which may well be floats there (ȳ = 1.785e308 ± 4e305 at
+    ū = 1e308, ∂ȳ/∂a = 3.2e308), and Monte Carlo offered, which needs no gradient."""
     M = len(yb)
+    if gradients is not None:
+        lost = {k: ~np.isfinite(np.asarray(G).reshape(M, -1)).all(axis=1) for k, G in zip(("ȳ", "its gain"), gradients)}
+        if (lost["ȳ"] | lost["its gain"]).any():
+            i = int(np.flatnonzero(lost["ȳ"] | lost["its gain"])[0])
+            what = "ȳ" if lost["ȳ"][i] else "its gain"  # the gain's follows from ȳ's: the first said alone
+            raise ValueError(f"the delta method's gradient of {what} leaves the float range (±1.8e308) at "
+                             f"ū = {point_texts(np.asarray(ub))[i]} (ȳ = {yb[i]:g}): method='monte-carlo' draws the "
+                             "band without it; or give levels where the static map's gradient is a float")
     with np.errstate(over="ignore", invalid="ignore"):
         ends = {"ȳ": (np.column_stack([yb + hy, yb - hy]), hy.reshape(M, -1)),
                 "its gain": (np.column_stack([(gain + hg).reshape(M, -1), (gain - hg).reshape(M, -1)]),
@@ -1654,11 +1744,10 @@ def _refuse_overflow(ub: np.ndarray, yb: np.ndarray, hy: np.ndarray, gain: np.nd
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
         what = " and ".join(f"the band of {k}" for k in over if over[k][i])
-        how = "" if drawn else " (method='monte-carlo' draws it without the delta method's gradient)"
         leave = "leave" if " and " in what else "leaves"
         at = point_texts(np.asarray(ub))[i]
         raise ValueError(f"the band overflows at ū = {at} (ȳ = {yb[i]:g}): {what} {leave} "
-                         f"the float range (±1.8e308){how}; give levels where the static map and its band are floats")
+                         "the float range (±1.8e308); give levels where the static map and its band are floats")
 
 
 def _own(y: np.ndarray, g: np.ndarray, y_est: np.ndarray, g_est: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -1800,7 +1889,7 @@ def static_curve_band(
         Gy = static_theta_gradient_of(p, A, th, uc, yb)
         Gg = static_gain_gradient(p, A, th, uc, yb, Gy)[:, 0, :]
         sy, sg = uncertainty.std_of(Gy), uncertainty.std_of(Gg)
-        _refuse_overflow(ub, yb, z * sy, gain, z * sg, drawn=False)
+        _refuse_overflow(ub, yb, z * sy, gain, z * sg, drawn=False, gradients=(Gy, Gg))
         return StaticCurveBand(ub, yb, yb - z * sy, yb + z * sy, sy, gain, gain - z * sg, gain + z * sg, sg,
                                uncertainty.level, "delta", 0, np.zeros(ub.size), m.name, m.units)
     rng = np.random.default_rng(seed)
@@ -1888,7 +1977,7 @@ def static_surface_band(
         Gg = static_gain_gradient(p, A, th, ub, yb, dy)  # (M, m, n)
         sy = uncertainty.std_of(dy)
         sg = uncertainty.std_of(Gg.reshape(-1, th.size)).reshape(gain.shape)
-        _refuse_overflow(ub, yb, z * sy, gain, z * sg, drawn=False)
+        _refuse_overflow(ub, yb, z * sy, gain, z * sg, drawn=False, gradients=(dy, Gg))
         return StaticSurfaceBand(ub, names, yb, yb - z * sy, yb + z * sy, sy, gain, gain - z * sg, gain + z * sg, sg,
                                  uncertainty.level, "delta", 0, np.zeros(ub.shape[0]), m.name, m.units)
     rng = np.random.default_rng(seed)

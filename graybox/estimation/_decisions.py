@@ -288,7 +288,10 @@ def decide_dsf(
         scores the set's own J_S (to 1e-6) are the fitting records: ``ValueError``; so is a record with
         the samples of one of its fitting records, or a slice of one: for a set fitted in this session
         (``pe_pareto``, ``se_pareto``, ``from_thetas``) by those records' samples, for one loaded from
-        a file by their prints saved with it (files written before prints were kept have none).
+        a file by their prints saved with it (files written before prints were kept have none). The samples also
+        show the fitting data in other units, from another zero or rounded by a file (y × 1000); prints do not,
+        so a set read from a file does not refuse those unless units both name differ (give it its records,
+        ``dataclasses.replace(pareto, fitted_on=(data.ident,))``, for the samples' check).
 
     Returns
     -------

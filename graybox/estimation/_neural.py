@@ -434,11 +434,11 @@ class NeuralModel(Relocked):
         check_str(self.name, "name")
         if self.Ts is not None:
             object.__setattr__(self, "Ts", check_real(self.Ts, "Ts (seconds)", low=0, low_open=True))
-        object.__setattr__(self, "units", check_units(self.units, f"network {self.name!r}"))
         names = check_input_names(self.input_names)
         if len(names) != 1:
             raise ValueError(f"input_names: a network has one input, got {len(names)} names {names}")
         object.__setattr__(self, "input_names", names)
+        object.__setattr__(self, "units", check_units(self.units, f"network {self.name!r}", 1))  # its one input's
         ny = check_int(self.ny, "ny", low=0)
         nu = check_int(self.nu, "nu", low=1)
         ne = check_int(self.ne, "ne", low=0)
@@ -484,14 +484,30 @@ class NeuralModel(Relocked):
         return max(self.ny, self.nu)
 
     def with_name(self, name: str) -> "NeuralModel":
-        """The same network under another label, ``name``."""
+        """The same network under another label.
+
+        Parameters
+        ----------
+        name : str
+            The new label.
+
+        Returns
+        -------
+        NeuralModel
+        """
         return NeuralModel(self.W1, self.b1, self.w2, self.b2, self.ny, self.nu, self.ne,
                            self.u_offset, self.u_scale, self.y_offset, self.y_scale, name, self.input_names,
                            self.Ts, self.units)
 
     def check_record(self, record: Record) -> None:
         """``ValueError`` when ``record`` (or static points) was sampled at another period than the network was
-        trained at, or is in other units where both name them (as :meth:`graybox.Model.check_record`)."""
+        trained at, or is in other units where both name them (as :meth:`graybox.Model.check_record`).
+
+        Parameters
+        ----------
+        record : Record or StaticPoints
+            Its ``Ts`` (s) and units are compared with the network's.
+        """
         check_fitted_on(self.Ts, self.units, f"network {self.name!r} was trained", record,
                         "its weights hold in those units only; convert the data", self.input_names)
 
@@ -536,6 +552,11 @@ class NeuralModel(Relocked):
             Measured data (input and output units), more than ``max_lag`` samples (``ValueError`` otherwise).
         horizon : int >= 1, keyword-only
             Samples ahead (default 1).
+
+        Returns
+        -------
+        ndarray, shape (N,)
+            Predicted output, output units.
         """
         require_record(record, call="model.predict(r)")  # a Dataset: told to pass data.ident or data.valid
         horizon = check_int(horizon, "horizon", low=1)
@@ -570,6 +591,11 @@ class NeuralModel(Relocked):
 
     def predict_narmax(self, record: Record) -> tuple[np.ndarray, np.ndarray]:
         """The training predictor over ``record``: one step ahead with the residuals fed back (``nnnarmax2``).
+
+        Parameters
+        ----------
+        record : Record
+            Measured data (input and output units), more than ``max_lag`` samples (``ValueError`` otherwise).
 
         Returns
         -------
@@ -687,10 +713,20 @@ class NeuralModel(Relocked):
         return d @ self.W1[:, : self.ny]
 
     def equilibria(self, ubar: float) -> list[Equilibrium]:
-        """Every real equilibrium at constant input ``ubar`` (input units), sorted by ȳ, with stability.
+        """Every real equilibrium at constant input ``ubar``, sorted by ȳ, with stability.
 
         Stability is decided by ``schur_stable`` on the linearisation (the test
         every model of the package uses); the spectral radius is given for information.
+
+        Parameters
+        ----------
+        ubar : float
+            One input level, input units.
+
+        Returns
+        -------
+        list of Equilibrium
+            Each real equilibrium ȳ (output units) with its stability and spectral radius.
         """
         ub = check_real(ubar, "ubar (one input level)")  # as Model.equilibria: a bool or a list is no level
         return [Equilibrium(ub, float(self._y(yb)), s, rho) for yb, s, rho in self._equilibria_n(self._un(ub))]
@@ -751,10 +787,23 @@ class NeuralModel(Relocked):
         return out
 
     def static_gain(self, ubar: np.ndarray, y0: float | np.ndarray | None = None, *, strict: bool = True) -> np.ndarray:
-        """dȳ/dū along the static curve at each ū of ``ubar``, shape (M,), output units per input unit.
+        """dȳ/dū along the static curve at each ū of ``ubar``.
 
-        ``y0`` and ``strict`` as for :meth:`static_curve`. Implicit differentiation of ȳ = g(ȳ, ū):
-        dȳ/dū = g_ū / (1 − g_ȳ).
+        Implicit differentiation of ȳ = g(ȳ, ū): dȳ/dū = g_ū / (1 − g_ȳ).
+
+        Parameters
+        ----------
+        ubar : array_like, shape (M,)
+            Constant input levels (input units).
+        y0 : float or array_like of shape (M,), optional
+            As for :meth:`static_curve` (output units).
+        strict : bool
+            As for :meth:`static_curve` (False: NaN where no equilibrium is reached).
+
+        Returns
+        -------
+        ndarray, shape (M,)
+            Output units per input unit.
         """
         ub = one_input_levels(ubar)
         yb = self.static_curve(ub, y0=y0, strict=strict)

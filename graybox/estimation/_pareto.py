@@ -147,6 +147,11 @@ class ParetoSet(Relocked):
         The records the set was fitted on (:meth:`from_thetas` and the estimators keep them), or, for a set read
         from a file, their prints (names, lengths and hashes of blocks of samples, which :mod:`graybox.io` saves in
         their stead): :func:`graybox.decide_dsf` refuses them, a copy or a slice of one as choosing records.
+        Prints compare the samples' bits: they see a copy or a slice sample for sample, not the same samples in
+        other units or from another zero (y × 1000, °C as K) or rounded by a file (6 digits), which records refuse;
+        :meth:`check_record` refuses other units where the set and the choosing record both name them. To run the
+        records' check on a set read from a file, give it the records again where they are at hand:
+        ``dataclasses.replace(pareto, fitted_on=(data.ident,))``.
         A field, so that ``dataclasses.replace``, copies, pickles and files keep it; not shown in the repr.
         Empty (default): unknown, that check left to the set's own J_S.
     """
@@ -234,16 +239,37 @@ class ParetoSet(Relocked):
     ) -> "ParetoSet":
         """Evaluate θs with :func:`graybox.evaluate_thetas` and build the set.
 
-        ``thetas`` (P, n_terms), one member per row, engineering units; ``lambdas`` (P,) their λ1 (None:
-        NaN); J_1 and J_S on ``data``, J_SF at ``static``; ``method`` labels the set, ``extra`` holds
-        per-member arrays (e.g. ``"radius"``), ``threads`` run the free runs. With several records J_1
-        and J_S are the sample-weighted means over the records (each
-        counted from its own max-lag on). ``static=None`` leaves J_SF as NaN. Rows listed in
-        ``failures`` (index -> reason) are kept as failed members (θ NaN, J's inf). ``structure``
-        may be a Structure, a sequence of terms, a Model or a result that carries one. ``centred``:
-        (θ_c, offsets), the members as a fit on the signals less ``offsets`` holds them (a structure closed
-        under shifts), whose J's are computed there, on the
-        records and points less the offsets (the same J's, without the offsets' powers that ``thetas`` carry).
+        Parameters
+        ----------
+        structure : Structure, sequence of str, Model, or a result that carries one
+            The members' process terms.
+        thetas : ndarray, shape (P, n_terms)
+            One member per row, engineering units.
+        lambdas : ndarray, shape (P,), or None
+            Their λ1 (None: NaN).
+        data : Record, sequence of Record, or Dataset
+            J_1 and J_S are computed on it (output units²); with several records they are the sample-weighted
+            means over the records (each counted from its own max-lag on).
+        static : StaticPoints or None
+            J_SF is computed at them (output units²); None leaves J_SF as NaN.
+        method : str, optional
+            Labels the set.
+        extra : mapping of str to ndarray of shape (P,), optional
+            Per-member arrays (e.g. ``"radius"``).
+        threads : int, optional
+            Threads that run the free runs (default 1).
+        failures : mapping of int to str, optional
+            Rows (index -> reason) kept as failed members (θ NaN, J's inf).
+        centred : (ndarray of shape (P, n_terms), mapping of str to float), optional
+            (θ_c, offsets), the members as a fit on the signals less ``offsets`` holds them (a structure closed
+            under shifts), whose J's are computed there, on the records and points less the offsets (the same
+            J's, without the offsets' powers that ``thetas`` carry); the offsets name y and every input, each in
+            its signal's units.
+
+        Returns
+        -------
+        ParetoSet
+            P members, in the order of ``thetas``.
         """
         structure = as_structure(structure)
         th = np.atleast_2d(np.asarray(thetas, float)).copy()
@@ -275,7 +301,13 @@ class ParetoSet(Relocked):
 
     def check_record(self, record: Record) -> None:
         """``ValueError`` when ``record`` (or static points) was sampled at another period than the set was fitted
-        at, or is in other units where both name them (as :meth:`graybox.Model.check_record`)."""
+        at, or is in other units where both name them (as :meth:`graybox.Model.check_record`).
+
+        Parameters
+        ----------
+        record : Record or StaticPoints
+            Its ``Ts`` (s) and units are compared with the set's.
+        """
         check_fitted_on(self.Ts, self.units, "the Pareto set was fitted", record,
                         "its members' parameters hold in those units only; convert the data", self.input_names)
 
@@ -284,7 +316,18 @@ class ParetoSet(Relocked):
         return int(self.thetas.shape[0])
 
     def objective(self, name: str) -> np.ndarray:
-        """One objective by name: ``"J1"``, ``"JS"``, ``"JSF"`` or a key of ``extra``."""
+        """One objective by name.
+
+        Parameters
+        ----------
+        name : str
+            ``"J1"``, ``"JS"``, ``"JSF"`` or a key of ``extra`` (another is refused: ``ValueError``).
+
+        Returns
+        -------
+        ndarray, shape (K,)
+            One value per member (J's in output units²; inf for a failed member).
+        """
         if name in OBJECTIVES:
             return getattr(self, name)
         if name in self.extra:
@@ -292,11 +335,23 @@ class ParetoSet(Relocked):
         raise ValueError(f"unknown objective {name!r}; this set has {list(OBJECTIVES) + list(self.extra)}")
 
     def member_model(self, i: int, name: str | None = None) -> Model:
-        """Member ``i`` as a :class:`~graybox.Model` (``name``: its label; default: the method and λ1).
+        """Member ``i`` as a :class:`~graybox.Model`.
 
         A set holds many models, so it has no ``.model`` of its own (that name is, on every other
         result, the one model it carries): pick a member here, or one by a rule with
         :func:`graybox.decide_dsf`.
+
+        Parameters
+        ----------
+        i : int
+            Member index, -K <= i < K (negative from the end); a failed member is refused (``ValueError``).
+        name : str, optional
+            The model's label (default: the method and λ1, or the method and ``#i`` without λ1).
+
+        Returns
+        -------
+        Model
+            With the set's inputs, ``Ts`` and units.
         """
         K = len(self)
         i = check_int(i, "i")
@@ -311,11 +366,28 @@ class ParetoSet(Relocked):
                      units=self.units)
 
     def models(self) -> list[Model]:
-        """Every member that did not fail, as a Model, in order."""
+        """Every member that did not fail, as a Model, in order.
+
+        Returns
+        -------
+        list of Model
+            As :meth:`member_model` gives each.
+        """
         return [self.member_model(i) for i in range(len(self)) if i not in self.failures]
 
     def subset(self, index: np.ndarray | Sequence[int]) -> "ParetoSet":
-        """The members at ``index`` (a boolean mask or integer indices), in that order."""
+        """The members at ``index``, in that order.
+
+        Parameters
+        ----------
+        index : ndarray or sequence of int, or boolean mask of shape (K,)
+            Member indices (negative from the end), or a mask over the members.
+
+        Returns
+        -------
+        ParetoSet
+            Those members, failed ones kept with their reasons.
+        """
         idx, K = np.asarray(index), len(self)
         if idx.dtype == bool:
             if idx.shape != (K,):
@@ -337,7 +409,18 @@ class ParetoSet(Relocked):
         """The members that no other member dominates in ``objectives`` (order kept).
 
         A member with a NaN objective is not kept; an objective that no member has (J_SF of a set evaluated
-        without static points) is refused with ``ValueError``, not answered with an empty set."""
+        without static points) is refused with ``ValueError``, not answered with an empty set.
+
+        Parameters
+        ----------
+        objectives : sequence of str, optional
+            Names as :meth:`objective` takes them, at least one (default ``("JS", "JSF")``), each minimised.
+
+        Returns
+        -------
+        ParetoSet
+            The nondominated members that did not fail.
+        """
         if isinstance(objectives, str) or not hasattr(objectives, "__len__"):
             raise TypeError(f"objectives must be a sequence of objective names, got {objectives!r}")
         if len(objectives) < 1:
@@ -359,7 +442,19 @@ class ParetoSet(Relocked):
         return self.subset(keep)
 
     def to_frame(self, params: bool = False) -> pd.DataFrame:
-        """One row per member: ``lambda1``, ``J1``, ``JS``, ``JSF``, extras (and θ by term if ``params``)."""
+        """The set as a table.
+
+        Parameters
+        ----------
+        params : bool, optional
+            Also one column per term with the members' θ, engineering units (default False).
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per member (index ``member``): ``lambda1``, ``J1``, ``JS``, ``JSF`` (output units²), the
+            extras, ``failure`` (the reason, ``""`` for a member that did not fail), and θ by term if ``params``.
+        """
         import pandas as pd
 
         params = check_bool(params, "params")

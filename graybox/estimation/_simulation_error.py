@@ -703,6 +703,9 @@ class GAOptions:
         on none, every random individual would be the zero model).
     selective_pressure : float
         Linear ranking pressure in [1, 2] for the fitness that stochastic universal sampling uses.
+    stall : int, optional
+        Generations without a relative improvement of 1e-9 in the best cost after which a run stops early
+        (>= 1; None, the default: never early).
     """
 
     population: int = 200

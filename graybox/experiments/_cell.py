@@ -279,6 +279,11 @@ def run_cell(cell: Cell, data: gb.Dataset, *, threads: int = 1) -> dict[str, Any
         The cell's data set (identification, validation, static points).
     threads : int
         Threads for BLAS and numba inside the cell (1: the same numbers on every executor).
+
+    Returns
+    -------
+    dict of str to Any
+        The cell's row, one entry per column of :data:`COLUMNS` (``status`` says whether it fitted).
     """
     threads = check_int(threads, "threads", low=1)  # the caller's mistake, not the cell's: raised
     row = _row(cell)

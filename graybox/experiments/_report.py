@@ -1169,7 +1169,12 @@ class GridStatus:
         object.__setattr__(self, "reasons", FrozenMap(self.reasons))
 
     def summary(self) -> str:
-        """A few lines for a terminal."""
+        """A few lines for a terminal.
+
+        Returns
+        -------
+        str
+        """
         st = ", ".join(f"{self.counts.get(s, 0)} {s}" for s in STATUSES)
         # a cell stopped at its time limit, or whose worker died, is done (failed) with no run time stored
         tpc = (f"{self.time_per_cell:.3g} s per cell" if np.isfinite(self.time_per_cell) else

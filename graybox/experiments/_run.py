@@ -76,7 +76,13 @@ class GridRun:
         return self.skipped
 
     def summary(self) -> str:
-        """How many cells, how many reused and run now, their statuses, and any notes."""
+        """How many cells, how many reused and run now, their statuses, and any notes.
+
+        Returns
+        -------
+        str
+            One line, then one indented line per note.
+        """
         st = ", ".join(f"{self.counts.get(s, 0)} {s}" for s in STATUSES)
         head = (f"grid {self.grid!r} (spec {self.spec} of {self.store}): {self.cells} cells, {self.skipped} reused, "
                 f"{self.ran} run now ({self.executor}, {self.wall_time:.1f} s); {st}")

@@ -148,7 +148,10 @@ class GrayboxSelection:
         same samples for all; an error below round-off, 1e-20 of the mean square output, counts as that floor), ``JSF``
         (its static error, worst fold; NaN without static points), ``in_band``, ``vs_best`` and
         ``vs_best_se`` (log of its J_S over the best row's, and that log ratio's standard error over
-        the blocks by the delta method, both rows on the same blocks), ``eligible`` (the rule could choose it),
+        the blocks by the delta method, both rows on the same blocks), ``wanders`` (its model, run free over
+        an identification or choosing record's input from the output held at the 5th, 50th or 95th percentile of
+        those records' outputs, diverges: it stays bounded only near the records' own starts; such rows are not
+        eligible, unless every in-band row wanders), ``eligible`` (the rule could choose it),
         ``rank`` (1: the choice); with a test
         record also ``JS_test`` (its refitted model's J_S there, counted as ``JS_valid`` is: from
         the candidates' largest lag on, the same samples for every row, so it differs from
@@ -197,7 +200,7 @@ class GrayboxSelection:
     #: The kind of each column read as numbers or flags, where the table has it.
     COLUMN_KINDS = {"size": "int", "n_terms": "int", "lambda1": "real", "JS_valid": "real", "JSF": "real",
                     "in_band": "bool", "JS_test": "real", "JSF_test": "real", "vs_best": "real", "vs_best_se": "real",
-                    "eligible": "bool", "rank": "int"}
+                    "eligible": "bool", "rank": "int", "wanders": "bool"}
 
     def __post_init__(self) -> None:
         check_fields(self)  # types first: the table is a DataFrame, the band a real number
@@ -1054,6 +1057,41 @@ def _block_mse(st: gb.Structure, thetas: np.ndarray, rec: gb.Record, edges: np.n
     return out
 
 
+#: Where a row's model is started from besides each record's own first samples: the output held at these quantiles
+#: of the identification and choosing records' outputs (see :func:`_wanders`).
+_HELD_STARTS = (0.05, 0.5, 0.95)
+
+
+def _wanders(jobs: list, results: list[dict], members: list[int], plan: _Plan) -> np.ndarray:
+    """(rows,) whether each row's model diverges when started away from the records' own first samples.
+
+    Each row's member (the model its figures are of) runs free over every identification and choosing record's
+    input from the output held at :data:`_HELD_STARTS` of those records' outputs; a run the free run's own bound
+    stops (:func:`simulate_batch`, ``bounded``) marks the row. A model of the plant forgets where it started; one
+    that stays bounded only from the records' own starts (a small basin around the records' trajectories) was seen
+    to diverge on a longer test record after a bounded validation run (BENCHMARKS.md, "Models that diverge from a
+    held start"). Rows without a model: False (they are not chosen anyway)."""
+    records = list(plan.ident) + [r for fit, r, _ in plan.splits if fit is None]
+    levels = np.quantile(np.concatenate([r.y for r in records]), _HELD_STARTS)
+    out = np.zeros(len(jobs), bool)
+    for k, (job, res, i) in enumerate(zip(jobs, results, members)):
+        th = res["thetas"][i:i + 1] if i >= 0 else np.full((1, 1), np.nan)
+        if not np.all(np.isfinite(th)):
+            continue
+        st = gb.parse_structure(job.terms)
+        code, start = encode(st), max(st.max_lag, 1)
+        for rec in records:
+            u = record_inputs(rec, code.input_names)
+            for level in levels:
+                y = simulate_batch(code, th, u, np.full(start, level), start, bounded=True)
+                if not np.all(np.isfinite(y)):
+                    out[k] = True
+                    break
+            if out[k]:
+                break
+    return out
+
+
 def _jsf(st: gb.Structure, thetas: np.ndarray, sp: gb.StaticPoints | None) -> np.ndarray:
     out = np.full(thetas.shape[0], np.nan if sp is None else np.inf)
     ok = np.all(np.isfinite(thetas), axis=1)
@@ -1254,8 +1292,12 @@ def _ratio_se(a: np.ndarray, b: np.ndarray, w: np.ndarray) -> tuple[float, float
 
 def _choose(table: pd.DataFrame, scores: list[np.ndarray], weights: np.ndarray, rule: str) -> tuple[int, str]:
     """Position of the chosen row among the in-band rows (``table`` gains vs_best, vs_best_se,
-    eligible); the rule used."""
+    eligible); the rule used. Rows whose ``wanders`` is True are left out, and the best row is the best of the
+    others, unless every in-band row wanders."""
     ok = np.flatnonzero(table["in_band"].to_numpy())
+    if "wanders" in table.columns:  # a model that diverges from a held start is left out, unless every one does
+        steady = ok[~table["wanders"].to_numpy(bool)[ok]]
+        ok = steady if steady.size else ok
     js = table["JS_valid"].to_numpy(float)
     best = int(ok[np.argmin(js[ok])])
     vs, se = np.full(len(table), np.nan), np.full(len(table), np.nan)
@@ -1566,6 +1608,7 @@ def select_graybox(
                  "identification data, fitted per fold (optimistic: those searches saw the held-out folds); a "
                  "validation record (a Dataset) gives an honest choice", SelectionWarning)
             (jobs, results), (table, members, scores) = again, tabled
+    table["wanders"] = _wanders(jobs, results, members, plan)
     if table["in_band"].any():
         pos, used = _choose(table, scores, results[0]["weights"], rule)
         used_fallback = False

@@ -90,6 +90,10 @@ class SpecError(ValueError):
         Where the problem is, e.g. ``("variants", 2, "options", "solver")``.
     problem : str
         What is wrong, in words.
+    source : str or None
+        The spec's file (or the name given to its text), when known.
+    line : int or None
+        The line of the key in that TOML text, when known.
     """
 
     def __init__(self, problem: str, path: Sequence[str | int] = (), source: str | None = None,
@@ -108,7 +112,18 @@ class SpecError(ValueError):
         return f"{head}{where + ': ' if where else ''}{self.problem}"
 
     def within(self, *prefix: str | int) -> "SpecError":
-        """The same error with ``prefix`` put in front of its path."""
+        """The same error with ``prefix`` put in front of its path.
+
+        Parameters
+        ----------
+        *prefix : str or int
+            Keys and list positions of the spec, outermost first (e.g. ``"variants", 2``).
+
+        Returns
+        -------
+        SpecError
+            Of this error's type (a :class:`SpecTypeError` stays one), with the same problem, source and line.
+        """
         return type(self)(self.problem, tuple(prefix) + self.path, self.source, self.line)
 
 
@@ -118,6 +133,11 @@ class SpecTypeError(SpecError, TypeError):
     A ``TypeError``, as graybox's argument checks raise for a wrong type (``graybox.core._validation``),
     and a :class:`SpecError`, so that ``except SpecError`` (the command line's one-line message) still
     catches every problem of a spec, with its key and line.
+
+    Attributes
+    ----------
+    problem, path, source, line
+        As for :class:`SpecError`.
     """
 
 
@@ -386,7 +406,14 @@ class DataSpec:
         object.__setattr__(self, "band", band)
 
     def to_dict(self) -> dict:
-        """Canonical form (what the spec says, not the data's content)."""
+        """Canonical form (what the spec says, not the data's content).
+
+        Returns
+        -------
+        dict
+            ``name``, the source (``bundled``; ``dataset``: ``"in memory"``; or the ``ident``, ``valid`` and
+            ``static`` file tables) and ``band`` (output units², or None).
+        """
         if self.bundled is not None:
             src: dict[str, Any] = {"bundled": self.bundled}
         elif self.dataset is not None:
@@ -405,6 +432,11 @@ class DataSpec:
         ----------
         base_dir : path, optional
             Folder that relative CSV paths are resolved against (default: the working folder).
+
+        Returns
+        -------
+        Dataset
+            In the units the files or the bundled set give.
         """
         if base_dir is not None:
             base_dir = check_path(base_dir, "base_dir")  # '~/data' the home folder's, as check_path reads it
@@ -678,11 +710,24 @@ class StructureSpec:
         return self.candidates is not None
 
     def to_dict(self) -> dict:
-        """Canonical form (name excluded: see :meth:`content`)."""
+        """Canonical form: the name and :meth:`content` (which leaves the name out).
+
+        Returns
+        -------
+        dict
+            ``{"name": …, **content()}``.
+        """
         return {"name": self.name, **self.content()}
 
     def content(self) -> dict:
-        """What determines the structure (the part a cell's key hashes)."""
+        """What determines the structure (the part a cell's key hashes).
+
+        Returns
+        -------
+        dict
+            ``{"terms": [...]}`` for given terms, else the candidates and FROLS's options (``n_terms``, ``tol``,
+            ``criterion``, ``max_terms``, ``include``).
+        """
         if self.terms is not None:
             return {"terms": list(self.terms)}
         return {"candidates": _thaw(self.candidates), "n_terms": self.n_terms, "tol": self.tol,
@@ -691,7 +736,13 @@ class StructureSpec:
     def identity(self) -> dict:
         """:meth:`content` with its terms (given or included) as a set, in the candidates' order
         (:meth:`graybox.Term.sort_key`): two structures of one identity are one fit, its θ in another order.
-        The content keeps the order given (θ's, and the cells' keys of stores written before)."""
+        The content keeps the order given (θ's, and the cells' keys of stores written before).
+
+        Returns
+        -------
+        dict
+            :meth:`content` with ``terms`` (or ``include``) sorted.
+        """
         c = self.content()
         key = "terms" if self.terms is not None else "include"
         c[key] = sorted(c[key], key=lambda t: Term.sort_key(parse_term(t)))
@@ -1048,7 +1099,14 @@ class DecisionRule:
         _wrap(check_choice, ("output",), self.output, "output", ("free-run", "one-step"))
 
     def to_dict(self) -> dict:
-        """Canonical form."""
+        """Canonical form.
+
+        Returns
+        -------
+        dict
+            ``rule``, and for ``"dsf"`` its ``band`` (output units², or None) and ``fallback``, for
+            ``"min_correlation"`` its ``output``.
+        """
         if self.rule == "dsf":
             return {"rule": "dsf", "band": self.band, "fallback": self.fallback}
         if self.rule == "min_correlation":
@@ -1181,11 +1239,23 @@ class Variant:
         return self.estimator in STOCHASTIC_ESTIMATORS
 
     def to_dict(self) -> dict:
-        """Canonical form (name included)."""
+        """Canonical form (name included).
+
+        Returns
+        -------
+        dict
+            ``{"name": …, **content()}``.
+        """
         return {"name": self.name, **self.content()}
 
     def content(self) -> dict:
-        """What determines the estimate (the part a cell's key hashes)."""
+        """What determines the estimate (the part a cell's key hashes).
+
+        Returns
+        -------
+        dict
+            ``estimator``, ``constraints``, ``lambdas``, ``decision`` (its canonical form, or None) and ``options``.
+        """
         options = dict(self.options)
         if (self.estimator in ("cls", "pe") and "reference" not in options
                 and any(c["type"] == "equality" and c.get("sigma_y") is None for c in self.constraints)):
@@ -1384,6 +1454,15 @@ class Grid:
         """Read the TOML spec at ``path`` (see ``graybox grid init`` for a commented example); its data files'
         relative paths are resolved against its folder.
 
+        Parameters
+        ----------
+        path : str or path-like
+            A UTF-8 TOML file.
+
+        Returns
+        -------
+        Grid
+
         Raises
         ------
         SpecError
@@ -1415,8 +1494,26 @@ class Grid:
 
     @classmethod
     def from_toml_text(cls, text: str, source: str = "<spec>", base_dir: str | None = None) -> "Grid":
-        """Parse a TOML spec given as text (``source`` names it in messages; relative data paths are resolved
-        against ``base_dir``, default the working directory)."""
+        """Parse a TOML spec given as text.
+
+        Parameters
+        ----------
+        text : str
+            The TOML spec.
+        source : str, optional
+            Names it in messages (default ``"<spec>"``).
+        base_dir : str, optional
+            Folder that relative data paths are resolved against (default: the working directory).
+
+        Returns
+        -------
+        Grid
+
+        Raises
+        ------
+        SpecError
+            Invalid TOML, or an unknown or wrong key, naming the key and its line.
+        """
         try:
             d = tomllib.loads(text)
         except tomllib.TOMLDecodeError as exc:
@@ -1439,7 +1536,24 @@ class Grid:
         """Build from ``d``, nested dicts shaped like the TOML spec (keys: name, seeds, data, structures,
         variants); relative data paths are resolved against ``base_dir``. A spec as a store keeps it
         (:func:`graybox.experiments.store_specs`) is one: a data set's ``y_unit`` there (its output's unit) is held
-        to the data's once they are read, and is no part of the grid's canonical form."""
+        to the data's once they are read, and is no part of the grid's canonical form.
+
+        Parameters
+        ----------
+        d : mapping
+            The spec's tables, as ``tomllib`` reads them.
+        base_dir : str, optional
+            Folder that relative data paths are resolved against (default: the working directory).
+
+        Returns
+        -------
+        Grid
+
+        Raises
+        ------
+        SpecError
+            An unknown or wrong key, naming its path in the spec.
+        """
         _check_keys(d, ("name", "seeds", "data", "structures", "variants"), "the grid spec")
         parts: dict[str, list] = {}
         y_units: dict[str, str] = {}  # a stored spec's (stored_spec) output unit of a data set: held to its data's
@@ -1489,14 +1603,31 @@ class Grid:
 
     # -- canonical form, data, cells --------------------------------------------------------
     def to_dict(self) -> dict:
-        """Canonical form of the whole grid (names, contents, seeds)."""
+        """Canonical form of the whole grid (names, contents, seeds).
+
+        Returns
+        -------
+        dict
+            ``name``, ``seeds`` and the canonical forms of the ``data``, ``structures`` and ``variants``.
+        """
         return {"name": self.name, "seeds": list(self.seeds),
                 "data": [d.to_dict() for d in self.data],
                 "structures": [s.to_dict() for s in self.structures],
                 "variants": [v.to_dict() for v in self.variants]}
 
     def load_data(self) -> dict[str, gb.Dataset]:
-        """Every data set, loaded, by name (CSV paths relative to ``base_dir``)."""
+        """Every data set, loaded, by name (CSV paths relative to ``base_dir``).
+
+        Returns
+        -------
+        dict of str to Dataset
+
+        Raises
+        ------
+        SpecError
+            A data set that cannot be loaded, or does not meet the spec (naming the file and line of a grid read
+            from TOML).
+        """
         try:
             return self._load_data()
         except SpecError as e:
@@ -1564,6 +1695,11 @@ class Grid:
         ----------
         datasets : mapping name -> Dataset, optional
             The loaded data (default: :meth:`load_data`); keys hash their content.
+
+        Returns
+        -------
+        tuple of Cell
+            One per data set × structure × variant (× seed, for a stochastic variant), in that order.
         """
         if datasets is None:
             ds = self.load_data()
@@ -1611,7 +1747,18 @@ class Grid:
         return tuple(out)
 
     def fingerprint(self, cells: Sequence[Cell]) -> str:
-        """A hash of the grid: its names and its cells' keys (so: contents, data, version)."""
+        """A hash of the grid: its names and its cells' keys (so: contents, data, version).
+
+        Parameters
+        ----------
+        cells : sequence of Cell
+            The grid's cells (:meth:`cells`).
+
+        Returns
+        -------
+        str
+            16 hexadecimal digits.
+        """
         return _hash({"name": self.name, "cells": [[c.key, c.data, c.structure, c.variant, c.seed] for c in cells]})
 
     __repr__ = short_repr  # one line: the fields summarised, arrays by their shape

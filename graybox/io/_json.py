@@ -61,7 +61,10 @@ are read and not checked. The units
 A :class:`~graybox.ParetoSet`'s ``fitted_on`` is saved as a print of each record it was fitted on (its name, length,
 input names and hashes of its samples in blocks of 16, or of N / 4096 for longer records: not the samples), so that
 the set read back refuses those records, copies and slices of them (at least two blocks long) as choosing records (:func:`graybox.decide_dsf`'s ``choose_on``) as the set
-did when it was made; a file written without it loads, with that check left to the set's own J_S.
+did when it was made; a file written without it loads, with that check left to the set's own J_S. A print compares
+the samples' bits: the fitting data in other units, from another zero or rounded (y × 1000, a file written to 6
+digits), which the set with its records refuses, pass it (units named on both sides are still compared); give the set
+read back its records (``dataclasses.replace(pareto, fitted_on=(data.ident,))``) to run that check.
 """
 
 from __future__ import annotations
@@ -730,7 +733,8 @@ _CODECS: dict[str, tuple[type | str, tuple[tuple[str, str], ...]]] = {
     "SimulationBand": (SimulationBand, (("model_name", "str"), ("record_name", "str"), ("method", "str"),
                                         ("level", "float"), ("n_samples", "int"), ("diverged", "float"),
                                         ("units", "units"), ("t", "array1"), ("y", "array1"), ("yhat", "array1"),
-                                        ("low", "array1"), ("high", "array1"), ("std", "array1"))),
+                                        ("low", "array1"), ("high", "array1"), ("std", "array1"),
+                                        ("input_names", "names_or_none"))),
     "CLSResult": (CLSResult, (("model", "Model"), ("static", "static_or_none"), ("constraints", "names"), ("solver", "str"))),
     "LocalModel": (LocalModel, (("ubar", "array1"), ("ybar", "float_or_none"), ("status", "str"), ("reason", "str"),
                                 ("a", "array1"), ("b", "array2"), ("Ts", "float"), ("input_names", "names"), ("name", "str"),
@@ -881,6 +885,8 @@ _ADDED: dict[str, dict[str, Any]] = {"ELSResult": {"n_direct": 0}, "Decision": {
                                      # units for display, carried since loaders36: none said
                                      "StaticPoints": {"units": _DEFAULT},
                                      "StaticCurveBand": {"units": _DEFAULT}, "StaticSurfaceBand": {"units": _DEFAULT},
+                                     # the record's inputs its per-input units are of, kept since mend62b: unknown
+                                     "SimulationBand": {"input_names": None},
                                      # the sequences' tails, carried since hunt59d: normal ones (the Bonferroni
                                      # limit those files hold); the permutations the limit was set on, since
                                      # stats61f: none (the Bonferroni limit, or its Edgeworth tails)

@@ -110,6 +110,12 @@ def j1(model: Model, record: Record | Dataset) -> float:
     record : Record or Dataset
         Measured data; a Dataset stands for its validation record (a model is judged on data it
         was not fitted on).
+
+    Returns
+    -------
+    float
+        mean((y(k) − ŷ(k|k−1))²) over samples max_lag … N − 1, output units²; inf where the prediction is not
+        finite.
     """
     model = as_model(model, duck=("predict", "max_lag"))
     record = as_record(record, "valid", "record", call="j1(model, r)")
@@ -125,6 +131,12 @@ def js(model: Model, record: Record | Dataset) -> float:
         The model to score.
     record : Record or Dataset
         Measured data; a Dataset stands for its validation record.
+
+    Returns
+    -------
+    float
+        mean((y − ŷ_s)²) over samples max_lag … N − 1 of the free run ŷ_s, output units²; inf when the run
+        diverges.
     """
     model = as_model(model, duck=("simulate", "max_lag"))
     record = as_record(record, "valid", "record", call="js(model, r)")

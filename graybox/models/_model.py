@@ -121,27 +121,63 @@ class Model(Relocked):
         return self.structure.max_lag
 
     def with_theta(self, theta: np.ndarray, *, name: str | None = None) -> "Model":
-        """The same structure with parameters ``theta`` (shape (n_terms,), engineering units), named ``name``
-        (default: this model's name); the noise part is dropped, the inputs' names, ``Ts`` and units kept."""
+        """The same structure with other parameters; the noise part is dropped, the inputs' names, ``Ts`` and units
+        kept.
+
+        Parameters
+        ----------
+        theta : ndarray, shape (n_terms,)
+            Process parameters, in engineering units (those of the model's output and inputs).
+        name : str, optional
+            The new model's name (default: this model's name).
+
+        Returns
+        -------
+        Model
+        """
         return Model(self.structure, theta, name=self.name if name is None else name, input_names=self.input_names,
                      Ts=self.Ts, units=self.units)
 
     def check_period(self, record: Record) -> None:
         """``ValueError`` when ``record`` is sampled at another period than the model was identified at
-        (nothing when the model's ``Ts`` is unknown)."""
+        (nothing when the model's ``Ts`` is unknown).
+
+        Parameters
+        ----------
+        record : Record
+            Its ``Ts`` (s) is compared with the model's.
+        """
         check_period(self.Ts, f"model {self.name!r} was identified on records sampled", record)
 
     def check_record(self, record: Record) -> None:
         """``ValueError`` when ``record`` (or static points) cannot be met by this model: sampled at another
-        period than the model was identified at, or in other units where both name them."""
+        period than the model was identified at, or in other units where both name them.
+
+        Parameters
+        ----------
+        record : Record or StaticPoints
+            Its ``Ts`` (s) and units are compared with the model's.
+        """
         check_fitted_on(self.Ts, self.units, f"model {self.name!r} was identified", record,
                         "its parameters hold in those units only; convert the data (or give them the model's units "
                         "if only the label differs)", self.input_names)
 
     # -- dynamics -----------------------------------------------------------
     def predict(self, record: Record, *, horizon: int = 1) -> np.ndarray:
-        """Prediction ``horizon`` samples ahead over ``record`` (default one step), shape (N,); see
-        :func:`graybox.predict`. A ``record`` sampled at another period than ``Ts``, or in other ``units``, is refused."""
+        """Prediction ``horizon`` samples ahead over ``record``; see :func:`graybox.predict`.
+
+        Parameters
+        ----------
+        record : Record
+            N samples; one sampled at another period than ``Ts``, or in other ``units``, is refused (``ValueError``).
+        horizon : int, optional
+            Steps ahead, >= 1 (default 1: one-step-ahead prediction).
+
+        Returns
+        -------
+        ndarray, shape (N,)
+            Predicted output, output units.
+        """
         self.check_record(record)
         return _simulation.predict(self.structure, self.theta, record, horizon=horizon)
 
@@ -158,19 +194,31 @@ class Model(Relocked):
         on_diverge: Literal["raise", "nan"] = "raise",
         bound: float | None = None,
     ) -> np.ndarray:
-        """Free run, shape (N,), output units; see :func:`graybox.simulate`.
+        """Free run; see :func:`graybox.simulate`.
 
-        ``u`` is a Record (inputs taken by name; sampled at ``Ts`` and in the model's ``units``, else
-        refused) or an array of shape (N,) or (N, m) with the columns in ``input_names`` order; a pandas DataFrame is read by
-        column name where its columns are the ``input_names`` (any order), by position where they
-        name none of them, and refused where they name some (``ValueError`` naming the columns).
-        ``y0`` holds the first ``max_lag`` outputs (default with a Record: its measured ones; needed
-        with an array). ``on_diverge``: when the output leaves the bound, ``"raise"`` (default) a
-        :class:`~graybox.DivergenceError` naming the sample, or ``"nan"`` NaN from that sample on.
-        ``bound`` (output units) is the divergence bound on |y| (default: 1e6 × the largest of
-        max|y0|, the level the inputs' direct push on the output so far holds it at through the
-        linear feedback, and the size at which the model's nonlinear output feedback matters, in the
-        output's units whatever they are, also from rest).
+        Parameters
+        ----------
+        u : Record, or ndarray or pandas.DataFrame, shape (N,) or (N, m)
+            A Record (inputs taken by name; sampled at ``Ts`` and in the model's ``units``, else refused) or an
+            array with the columns in ``input_names`` order, input units; a DataFrame is read by column name where
+            its columns are the ``input_names`` (any order), by position where they name none of them, and refused
+            where they name some (``ValueError`` naming the columns).
+        y0 : ndarray, shape (>= max_lag,), optional
+            The first ``max_lag`` outputs, output units (default with a Record: its measured ones; needed with an
+            array).
+        on_diverge : {"raise", "nan"}
+            When the output leaves the bound, ``"raise"`` (default) a :class:`~graybox.DivergenceError` naming the
+            sample, or ``"nan"`` NaN from that sample on.
+        bound : float, optional
+            The divergence bound on |y|, output units (default: 1e6 × the largest of max|y0|, the level the
+            inputs' direct push on the output so far holds it at through the linear feedback, and the size at which
+            the model's nonlinear output feedback matters, in the output's units whatever they are, also from
+            rest).
+
+        Returns
+        -------
+        ndarray, shape (N,)
+            The simulated output, output units.
         """
         if isinstance(u, Record):
             self.check_record(u)
@@ -186,34 +234,53 @@ class Model(Relocked):
     def clusters(self) -> dict[str, float]:
         """Cluster coefficients by name, Σ = R θ.
 
-        ``{"Σ0": …, "Σy": …, "Σu": …}``; with several inputs one cluster per output power and
-        input powers (``"Σyu1"``, ``"Σu1u2²"``, …).
+        Returns
+        -------
+        dict of str to float
+            ``{"Σ0": …, "Σy": …, "Σu": …}``; with several inputs one cluster per output power and
+            input powers (``"Σyu1"``, ``"Σu1u2²"``, …).
         """
         cm = self.cluster_map()
         with np.errstate(over="ignore"):  # a sum beyond the float range is ±inf, and says so
             return dict(zip(cm.names, (cm.R @ self.theta).tolist()))
 
     def cluster_map(self) -> _static.ClusterMap | _static_surface.SurfaceClusterMap:
-        """The clusters and the 0/1 map R of this structure (per input power with several inputs)."""
+        """The clusters and the 0/1 map R of this structure (per input power with several inputs).
+
+        Returns
+        -------
+        ClusterMap or SurfaceClusterMap
+            As :func:`graybox.cluster_map` (one input) or :func:`graybox.surface_cluster_map` (several) give it.
+        """
         if self.n_inputs > 1:
             return _static_surface.surface_cluster_map(self.structure, input_names=self.input_names)
         return _static.cluster_map(self.structure)
 
     def static_curve(self, ubar: np.ndarray, y0: float | None = None, *, strict: bool = True) -> np.ndarray:
-        """Steady-state output at each ū of ``ubar`` (input units), shape (M,); see :func:`graybox.static_curve`.
+        """Steady-state output at each ū of ``ubar``; see :func:`graybox.static_curve`.
 
-        With several inputs, the static surface at the points ``ubar`` of shape (M, m)
-        (:func:`graybox.static_surface`): columns in ``input_names`` order, or a pandas DataFrame whose
-        columns are the ``input_names`` (read by name, any order), or a dict by input name
-        (``{"flow": [2.0, 7.0], "inlet": [20.0, 20.0]}``, one number each for one point; with one input
-        ``{"u": [1.0, 2.0]}`` its levels); transient inputs
-        (:func:`graybox.transient_inputs`) left out are 0, their level at every steady state, so a
-        one-input plant's model with them takes levels of shape (M, 1), or (M,) for M ≠ m (m values
-        could be one point as well, and are refused). ``y0`` (output units, one for all
-        ū or one per ū): the equilibrium a free run started there settles on, as J_SF counts it
-        (default: the one stable equilibrium). ``strict=True`` (default) raises ``ValueError`` naming
-        each ū where no equilibrium is reached (the first 20, and how many more); ``strict=False`` gives NaN
-        there.
+        Parameters
+        ----------
+        ubar : array_like, shape (M,), or shape (M, m) with several inputs, or dict
+            Input levels, input units. With several inputs, the static surface at the points ``ubar``
+            (:func:`graybox.static_surface`): columns in ``input_names`` order, or a pandas DataFrame whose
+            columns are the ``input_names`` (read by name, any order), or a dict by input name
+            (``{"flow": [2.0, 7.0], "inlet": [20.0, 20.0]}``, one number each for one point; with one input
+            ``{"u": [1.0, 2.0]}`` its levels); transient inputs
+            (:func:`graybox.transient_inputs`) left out are 0, their level at every steady state, so a
+            one-input plant's model with them takes levels of shape (M, 1), or (M,) for M ≠ m (m values
+            could be one point as well, and are refused).
+        y0 : float or array_like, shape (M,), optional
+            Output units, one for all ū or one per ū: the equilibrium a free run started there settles on, as J_SF
+            counts it (default: the one stable equilibrium).
+        strict : bool, optional
+            ``True`` (default) raises ``ValueError`` naming each ū where no equilibrium is reached (the first 20,
+            and how many more); ``False`` gives NaN there.
+
+        Returns
+        -------
+        ndarray, shape (M,)
+            ȳ, output units.
         """
         if self.n_inputs > 1:
             return _static_surface.static_surface(self.structure, self.theta, ubar, y0=y0, strict=strict,
@@ -228,8 +295,19 @@ class Model(Relocked):
         return ubar
 
     def equilibria(self, ubar: float | np.ndarray) -> list[_static.Equilibrium]:
-        """Every real equilibrium at ū ``ubar`` (a float, or a point of shape (m,) with several inputs) with its
-        stability; see :func:`graybox.equilibria`."""
+        """Every real equilibrium at one input level, with its stability; see :func:`graybox.equilibria`.
+
+        Parameters
+        ----------
+        ubar : float, or array_like, shape (m,), or dict
+            The input level ū, input units: a float, or a point of shape (m,) (or a dict by input name) with
+            several inputs.
+
+        Returns
+        -------
+        list of Equilibrium
+            Each real equilibrium ȳ (output units) with its spectral radius and stability.
+        """
         if self.n_inputs > 1:
             return _static_surface.surface_equilibria(self.structure, self.theta, ubar, input_names=self.input_names)
         one = self._one_input(ubar)
@@ -237,10 +315,21 @@ class Model(Relocked):
                                   else one)
 
     def static_gain(self, ubar: np.ndarray, y0: float | None = None, *, strict: bool = True) -> np.ndarray:
-        """dȳ/dū along the static curve at each ū of ``ubar``, shape (M,); with several inputs the gradient,
-        shape (M, m).
+        """dȳ/dū along the static curve at each ū of ``ubar``; with several inputs the gradient.
 
-        ``y0`` and ``strict`` as for :meth:`static_curve` (``strict=False``: NaN where no equilibrium is reached).
+        Parameters
+        ----------
+        ubar : array_like, shape (M,), or shape (M, m) with several inputs, or dict
+            Input levels, input units, as for :meth:`static_curve`.
+        y0 : float or array_like, shape (M,), optional
+            As for :meth:`static_curve` (output units).
+        strict : bool, optional
+            As for :meth:`static_curve` (``False``: NaN where no equilibrium is reached).
+
+        Returns
+        -------
+        ndarray, shape (M,), or shape (M, m) with several inputs
+            Gain in output units per input unit.
         """
         if self.n_inputs > 1:
             return _static_surface.static_surface_gain(self.structure, self.theta, ubar, y0=y0, strict=strict,
@@ -254,7 +343,17 @@ class Model(Relocked):
 
     # -- printing -----------------------------------------------------------
     def equation(self, *, digits: int = 4) -> str:
-        """Paper-style equation, e.g. ``y(k) = 0.6303 y(k-1) - 0.0264 y(k-4) + …`` (``digits`` significant)."""
+        """Paper-style equation, e.g. ``y(k) = 0.6303 y(k-1) - 0.0264 y(k-4) + …``.
+
+        Parameters
+        ----------
+        digits : int, optional
+            Significant digits of each parameter, >= 1 (default 4).
+
+        Returns
+        -------
+        str
+        """
         digits = check_int(digits, "digits", low=1)
         parts = []
         for i, (th, t) in enumerate(zip(self.theta, self.structure)):
@@ -269,9 +368,17 @@ class Model(Relocked):
     def to_latex(self, digits: int = 4, terms_per_line: int | None = None) -> str:
         """The equation in LaTeX math (no ``$`` delimiters), the MA part written with ξ as in the paper.
 
-        Parameters printed to ``digits`` significant digits (default 4); ``terms_per_line`` breaks a long
-        model into an ``aligned`` block (put it inside
-        ``\\begin{equation}`` … ``\\end{equation}``).
+        Parameters
+        ----------
+        digits : int, optional
+            Significant digits of each parameter, >= 1 (default 4).
+        terms_per_line : int, optional
+            Breaks a long model into an ``aligned`` block of this many terms a line, >= 1 (put it inside
+            ``\\begin{equation}`` … ``\\end{equation}``); default: one line.
+
+        Returns
+        -------
+        str
         """
         digits = check_int(digits, "digits", low=1)
         if terms_per_line is not None:

@@ -18,7 +18,7 @@ from ..core._reprs import level_texts, per_unit, percent_text
 from ._pareto import _why_not_drawn
 from ._data import (SLICES_NAMED, check_axes, check_one_input_points, distinct_colours, legend_every, legend_text,
                     on_level, unit_label)
-from ..diagnostics._residuals import ResidualTests
+from ..diagnostics._residuals import ResidualTests, verdict_limit
 from ..diagnostics._simulation_band import SimulationBand
 from ..diagnostics._uncertainty import StaticCurveBand, StaticSurfaceBand
 
@@ -59,7 +59,7 @@ def plot_residual_tests(
         axs = check_axes(axes, len(items), "plot_residual_tests")
         fig = axs[0].figure
     for ax, t in zip(axs, items):
-        bad = np.abs(t.phi) > t.limit
+        bad = np.abs(t.phi) > verdict_limit(t.limit, t.permutations)  # the lags the verdict fails
         ax.vlines(t.lags, 0.0, t.phi, color="C0", lw=1.2)
         ax.plot(t.lags[~bad], t.phi[~bad], "o", ms=3, color="C0")
         if bad.any():

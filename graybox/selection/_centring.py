@@ -42,8 +42,9 @@ def signal_offsets(data: object) -> dict[str, float]:
         every record (pooled); a signal held at one level, that level (centred, exactly zero).
     """
     if is_dask_data(data):
-        raise ValueError("centre=True needs the records in memory (a DaskRecord is not centred); "
-                         "subtract the means yourself, or leave centre out")
+        raise ValueError("centre=True needs the records in memory (a DaskRecord is not centred): give a Record of "
+                         "its samples, or leave centre out (a fit on signals less means subtracted by hand is a model "
+                         "of those, not of the signals in their own units)")
     return {name: _centre_of(x) for name, x in pooled_signals(data).items()}
 
 
@@ -53,6 +54,21 @@ def pooled_signals(data: object) -> dict[str, np.ndarray]:
     us = np.concatenate([r.u.reshape(len(r.y), -1) for r in records])
     return {"y": np.concatenate([r.y for r in records]),
             **{n: us[:, i] for i, n in enumerate(records[0].input_names)}}
+
+
+def round_off_gain(data: object, centred: object) -> float:
+    """How much the centred signals' round-off exceeds what their own size suggests: their digits were rounded at
+    the size recorded. The largest ratio of a signal's mean square as recorded to centred, at least 1 (a signal
+    that centring makes zero counts none)."""
+    raw, cen = pooled_signals(data), pooled_signals(centred)
+    gain = 1.0
+    with np.errstate(over="ignore"):  # near the float range's ends: no gain said (the caller scales there)
+        for name, x in raw.items():
+            c = cen[name]
+            ratio = float(np.mean(x * x)) / float(np.mean(c * c)) if np.any(c) else 1.0
+            if np.isfinite(ratio):
+                gain = max(gain, ratio)
+    return gain
 
 
 def _centre_of(x: np.ndarray) -> float:

@@ -76,7 +76,7 @@ from ..core._validation import (Relocked, as_1d_finite, check_bool, check_choice
                                 check_mean_square, check_real, check_theta, locked, warn)
 from ._stopping import choose_model, stop_rule, FewerTermsError, StopRule
 from . import _centring
-from ._subset_search import search_sizes, SearchBudget, SubsetProblem
+from ._subset_search import prefix_floors, rss_floor, search_sizes, SearchBudget, SubsetProblem
 
 if TYPE_CHECKING:  # pandas takes ~0.4 s to import: loaded where a table is made
     import pandas as pd
@@ -92,13 +92,16 @@ _DEPENDENT = "linear combination of the selected terms"
 #: Candidates shown by default when the criterion has no stopping role.
 _DEFAULT_MAX_TERMS = 50
 
-# Residual energy below this fraction of yᵀy is round-off, not signal: without a floor the
-# criterion curve of noise-free data keeps "improving" at the 1e-30 level and the penalty
-# loses to ln(round-off).
+# The floor of select_graybox's free-run MSE, a fraction of the mean square output (graybox.experiments._select reads
+# it). FROLS's own floor on its residual sums is that of an exact fit's round-off (_subset_search.rss_floor): without
+# one the criterion curve of noise-free data keeps "improving" at round-off and the penalty loses to ln(round-off).
 _RSS_FLOOR = 1e-20
 
-# Columns whose |cos| with an earlier one exceeds 1 − this are the same column up to scale.
-_DUPLICATE_TOL = 1e-10
+# Columns whose |cos| with an earlier one exceeds 1 − this are the same column up to scale: columns that are (a held
+# input's lags, a two-level input's square and the constant) meet it to the round-off of their sums, ~1e-15. At 1e-10
+# (an angle of 1.4e-5) a lagged output 1e5 times its spread from zero was 'proportional to 1' in the Gram form, which
+# tests |cos| alone (MGS groups by a random projection at 1e-8 first, and kept it): the two chose different terms.
+_DUPLICATE_TOL = 1e-12
 
 # The Gram form sees a candidate's orthogonalised energy as G_jj − Σ C_ij², a difference of
 # O(N) numbers: below about this fraction of N it is round-off, so a candidate under it is
@@ -170,7 +173,7 @@ def information_criterion(name: str, rss: np.ndarray, n_rows: int, *, n_candidat
         raise ValueError("criterion ebic needs n_candidates (the number of candidates the terms were chosen among)")
     rss = as_1d_finite(rss, "rss")
     if np.any(rss <= 0):
-        # ln 0 = -inf: an exact fit's residual is round-off (frols floors it at 1e-20 of yᵀy)
+        # ln 0 = -inf: an exact fit's residual is round-off (frols floors it at 1e4 eps² (yᵀy + N (Σ|θ|)²))
         raise ValueError(f"rss must be > 0 (output units²), got {float(rss.min())!r}: an exact fit's residual sum "
                          "of squares is its round-off; floor it at a small fraction of yᵀy")
     k = np.arange(1, rss.size + 1, dtype=float)
@@ -238,13 +241,16 @@ class Selection(Relocked):
         of them.
     subset_rss : ndarray, shape (len(subsets),)
         Their residual sums of squares on the selection rows (output units²), from the triangular
-        factor of the scaled candidates beside y: values below 1e-20 yᵀy are that floor (round-off,
-        not signal).
+        factor of the scaled candidates beside y: values at an exact fit's round-off are floored at it
+        (1e4 eps² (yᵀy + N (Σ|θ_s|)²), θ_s the parameters of the unit-RMS columns: round-off, not signal).
     input_names : tuple of str, optional
         The model's inputs, in the column order of an input array (default: as
         :class:`~graybox.Model`'s; :func:`frols` takes the records').
     Ts : float, optional
         The sampling period (s) of the records it was fitted on (None: unknown); :attr:`model` carries it.
+    units : tuple, optional
+        The units of the input(s) and the output of those records (the input's one str, or one per input;
+        :func:`frols` takes the records'); :attr:`model` carries them. Empty: unknown.
     """
 
     structure: Structure
@@ -320,9 +326,12 @@ class Selection(Relocked):
     def to_frame(self) -> pd.DataFrame:
         """One row per evaluated term, in order.
 
-        Columns: ``term`` (str), ``ERR``, ``cumulative ERR``, the criterion (e.g. ``aic``,
-        value of the model made of this term and those above it), ``selected`` (bool),
-        ``theta`` (LS parameter, NaN when not selected). Index: rank 1 … K.
+        Returns
+        -------
+        pandas.DataFrame
+            Columns: ``term`` (str), ``ERR``, ``cumulative ERR`` (fractions of yᵀy), the criterion (e.g. ``aic``,
+            value of the model made of this term and those above it), ``selected`` (bool),
+            ``theta`` (LS parameter, engineering units, NaN when not selected). Index: rank 1 … K.
         """
         import pandas as pd
 
@@ -632,7 +641,8 @@ def frols(
         Number of terms to select, 1 ≤ n_terms ≤ number of process candidates.
     tol : float, optional
         ERR tolerance in (0, 1): stop once the unexplained fraction ``1 − ΣERR`` of yᵀy is at
-        most ``tol``, or at its round-off floor 1e-20 (an exact fit meets a tolerance below it).
+        most ``tol``, or at its round-off floor (an exact fit meets a tolerance below it; the floor is
+        1e4 eps² (yᵀy + N (Σ|θ_s|)²) / yᵀy, about 1e-27 for an output's own terms).
     criterion : {"aic", "bic", "fpe", "ebic"}, optional
         Information criterion (see :func:`information_criterion`). Default: ``"bic"`` for the greedy search,
         ``"ebic"`` for ``"swap"`` and ``"exact"``: they compare many subsets of each size (C(p, k)), and the best
@@ -746,8 +756,9 @@ def frols(
 
 def _frols_raw(candidates: Structure, data: object, *, n_terms: int | None, tol: float | None,
                criterion: str | None, max_terms: int | None, rank_tol: float, include: Sequence[Term | str],
-               method: str, search: str) -> Selection:
-    """frols(centre=False) on checked candidates (see frols)."""
+               method: str, search: str, round_off_gain: float = 1.0) -> Selection:
+    """frols(centre=False) on checked candidates (see frols); ``round_off_gain``: that of centred signals (see
+    :func:`~graybox.selection._subset_search.rss_floor`)."""
     process, noise = candidates.process, candidates.noise
     n_cand = len(process)
     # each value first (a wrong type is named as such), then how they combine
@@ -783,6 +794,7 @@ def _frols_raw(candidates: Structure, data: object, *, n_terms: int | None, tol:
     # the same ERR), so that neither their products nor yᵀy overflow or underflow where the data are finite
     given, (data, exps) = data, binary_scaled(data, process)
     cols = _scaled_columns(process, data, rule, max_terms, method, keep=forced)
+    cols.gain = round_off_gain
     N, yy, active, skipped = cols.n_rows, cols.yy, cols.active, cols.skipped
     # said together with the candidates dropped during the selection: one CandidateWarning per call
     said = [f"{len(skipped)} candidate(s) skipped (the data cannot tell them from others): "
@@ -829,7 +841,7 @@ def _frols_raw(candidates: Structure, data: object, *, n_terms: int | None, tol:
         forced, K = list(plan.order), (K if mode == "criterion" else n_plan)
     chosen, n_dependent = _forward(cols, process, forced, K, rule if plan is None else None, rank_tol,
                                    n_included=n_included, search=search)
-    C, g = _chosen_factors(cols, process, chosen)
+    C, g, rest = _chosen_factors(cols, process, chosen)
     if n_dependent:
         dep_terms = [t for t, why in skipped if why == _DEPENDENT]
         said.append(f"{n_dependent} candidate(s) dropped as linear combinations of selected terms on these data: "
@@ -839,8 +851,9 @@ def _frols_raw(candidates: Structure, data: object, *, n_terms: int | None, tol:
     k_eval = len(chosen)
     g = g[:k_eval]
     err_eval = g**2 / yy
-    # RSS from the orthogonal decomposition, floored at round-off (see _RSS_FLOOR)
-    rss = np.maximum(yy - np.cumsum(g**2), _RSS_FLOOR * yy)
+    # RSS from the orthogonal decomposition, floored at each fit's round-off (see rss_floor)
+    floors = prefix_floors(C[:k_eval][:, chosen], g, yy, N, cols.gain)
+    rss = np.maximum(rest + np.append(np.cumsum(g[::-1] ** 2)[::-1][1:], 0.0), floors)
     if k_eval >= N:
         raise ValueError(f"{k_eval} terms need more than their {N} regression rows (no error left to fit)")
     curve = _unscaled_curve(curve_name, rss, N, exps.get("y", 0), n_usable - n_included, n_included)
@@ -850,7 +863,8 @@ def _frols_raw(candidates: Structure, data: object, *, n_terms: int | None, tol:
         i, stop = choose_model(rule, np.arange(1, k_eval + 1)[n0:], curve[n0:], (rss / yy)[n0:],
                                can_grow=k_eval < min(n_usable - n_dependent, N - 1),
                                fraction="1 - ΣERR",
-                               rows_cap=N if k_eval == N - 1 < n_usable - n_dependent else None, round_off=_RSS_FLOOR)
+                               rows_cap=N if k_eval == N - 1 < n_usable - n_dependent else None,
+                               round_off=(floors / yy)[n0:])
         n_sel = n0 + i + 1
     else:
         n_sel, stop = n_plan, plan.stop
@@ -930,11 +944,12 @@ def _frols_centred(candidates: Structure, data: object, **options) -> Selection:
     given, (data, exps) = data, binary_scaled(data, candidates.process)
     offsets = _centring.search_offsets(data)
     centred = _centring.centred_data(data, offsets)
+    gain = _centring.round_off_gain(data, centred)
     _centring.check_included(options["include"], candidates.process, given)
     # the search's CandidateWarning is said after the closure, which can bring back a term it left out
     with warnings.catch_warnings(record=True) as heard:
         warnings.simplefilter("always")
-        sel = frols(candidates, centred, **options)
+        sel = _frols_raw(candidates, centred, **options, round_off_gain=gain)
     for w in heard:
         if not issubclass(w.category, CandidateWarning):
             warn(str(w.message), w.category)
@@ -1003,6 +1018,7 @@ class _Columns:
     G: np.ndarray | None = None
     b: np.ndarray | None = None
     engine: object = None
+    gain: float = 1.0  # of the round-off floor (rss_floor): signals centred after they were recorded
 
 
 def _scaled_columns(process: Structure, data: object, rule: StopRule, max_terms: int | None,
@@ -1125,17 +1141,31 @@ def _forward(cols: _Columns, process: Structure, forced: list[int], K: int, rule
         engine.choose(k, j, active, last=k + 1 == K)
         chosen.append(j)
         # at the floor the fit is exact: it meets a tolerance below the floor too (the stopping rule's round_off)
-        if rule is not None and rule.mode == "tol" and k + 1 >= len(forced) and \
-                engine.rss(k) / yy <= max(rule.tol, _RSS_FLOOR):
-            break
+        if rule is not None and rule.mode == "tol" and k + 1 >= len(forced):
+            r = engine.rss(k)
+            if r <= rule.tol * yy or r <= _floor_of(engine, chosen, yy, cols.n_rows, cols.gain):
+                break
     cols.engine = engine
     return chosen, n_dependent
 
 
-def _chosen_factors(cols: _Columns, process: Structure, chosen: list[int]) -> tuple[np.ndarray, np.ndarray]:
-    """The triangular factor C (k × n) of the chosen columns and the output's coordinates g (k,)."""
+def _floor_of(engine: _MGS | _GramOLS, chosen: list[int], yy: float, N: int, gain: float) -> float:
+    """:func:`rss_floor` of the fit of the terms chosen so far, from the forward pass's own factor."""
+    from scipy.linalg import solve_triangular
+
+    k = len(chosen)
+    with np.errstate(all="ignore"):  # a nearly dependent pivot: inf parameters, floored at yy
+        theta = solve_triangular(np.triu(engine.C[:k][:, chosen]), engine.g[:k], check_finite=False)
+    return rss_floor(yy, N, theta, gain)
+
+
+def _chosen_factors(cols: _Columns, process: Structure, chosen: list[int]) -> tuple[np.ndarray, np.ndarray, float]:
+    """The triangular factor C (k × n) of the chosen columns, the output's coordinates g (k,) and the energy of the
+    residual after all k (summed from the residual itself, not yᵀy − Σg²: that difference cancels to eps·yᵀy, far
+    above an exact fit's round-off when y sits on an offset)."""
     engine = cols.engine
     C, g = engine.C, engine.g
+    rest = engine.rss(len(chosen) - 1) if cols.method == "mgs" and chosen else None
     if cols.method == "gram" and chosen:
         # The Gram form ranks the candidates; the chosen ones' ERR, RSS and θ are then taken from
         # the triangular factor of [S_chosen, y] by TSQR over the same chunks (a second, narrow
@@ -1147,7 +1177,8 @@ def _chosen_factors(cols: _Columns, process: Structure, chosen: list[int]) -> tu
         C = np.zeros((k_, len(process)))
         C[:, chosen] = sign[:, None] * np.triu(R[:k_, :k_]) / cols.scales[chosen]
         g = sign * R[:k_, k_]
-    return C, g
+        rest = float(R[k_, k_] ** 2)
+    return C, g, (cols.yy if rest is None else rest)
 
 
 @dataclass(frozen=True, eq=False)
@@ -1187,8 +1218,9 @@ def _search_subsets_on(cols: _Columns, forced: list[int], K: int, rule: StopRule
         R, _ = r_factor(list(process.terms), cols.data, cols.start)
         R[:, :-1] /= cols.scales
     # a column is dependent at the forward pass's threshold, which runs on this subset next
-    problem = SubsetProblem(R, cols.yy, cols.active, _dependent_threshold(cols, rank_tol))
+    problem = SubsetProblem(R, cols.yy, cols.active, _dependent_threshold(cols, rank_tol), cols.gain)
     N = cols.n_rows
+    problem.settle_floor(forced, K, N)
     lo = max(1, len(forced)) if rule.mode != "n_terms" else rule.n_terms
     sizes = list(range(lo, K + 1))
     budget = SearchBudget(EXACT_NODES)
@@ -1207,7 +1239,7 @@ def _search_subsets_on(cols: _Columns, forced: list[int], K: int, rule: StopRule
                            can_grow=not plan.exhausted and ks.max() < min(n_free + len(forced), N - 1),
                            fraction="1 - ΣERR",
                            rows_cap=N if not plan.exhausted and ks.max() == N - 1 < n_free + len(forced) else None,
-                           round_off=_RSS_FLOOR)
+                           round_off=problem.floor / cols.yy)
     how = ("exact (branch and bound, proven)" if plan.proven else
            f"exact search ran out of its {EXACT_NODES} nodes: best found, not proven") if search == "exact" else \
         "swap (local optimum under single exchanges)"

@@ -90,6 +90,9 @@ class SEMPResult(Relocked):
         :class:`~graybox.Model`'s; :func:`semp` takes the records').
     Ts : float, optional
         The sampling period (s) of the records it was fitted on (None: unknown); :attr:`model` carries it.
+    units : tuple, optional
+        The units of the input(s) and the output of those records (the input's one str, or one per input;
+        :func:`semp` takes the records'); :attr:`model` carries them. Empty: unknown.
     """
 
     structure: Structure
@@ -114,7 +117,7 @@ class SEMPResult(Relocked):
         object.__setattr__(self, "input_names", names)
         if self.Ts is not None:
             object.__setattr__(self, "Ts", check_real(self.Ts, "Ts (seconds)", low=0, low_open=True))
-        object.__setattr__(self, "units", check_units(self.units, "SEMPResult"))
+        object.__setattr__(self, "units", check_units(self.units, "SEMPResult", len(names)))
         # finite, as the model it gives needs (files load through here); a read-only copy, as a Selection keeps
         object.__setattr__(self, "theta", frozen(check_theta(len(self.structure), self.theta)))
         check_choice(self.criterion, "criterion", CRITERIA)

@@ -77,7 +77,7 @@ def choose_model(
     can_grow: bool,
     fraction: str,
     rows_cap: int | None = None,
-    round_off: float = 0.0,
+    round_off: float | np.ndarray = 0.0,
 ) -> tuple[int, str]:
     """Index of the model the rule picks among those looked at, and why, in words.
 
@@ -106,9 +106,10 @@ def choose_model(
         size is rows − 1 and candidates were left): a criterion smallest there has only met the
         record's end, an interpolation rather than a choice, and gets a warning saying so; a
         tolerance not reached there is said to need a longer record.
-    round_off : float, optional
-        The unexplained fraction's floor (the selector's residual floored at round-off): a model
-        at it fits exactly, and meets any tolerance, however far below the floor (default 0).
+    round_off : float or ndarray of shape (M,), optional
+        The unexplained fraction's floor (the selector's residual floored at round-off), one for all
+        models or one each: a model at it fits exactly, and meets any tolerance, however far below the
+        floor (default 0).
 
     Returns
     -------
@@ -134,14 +135,15 @@ def choose_model(
         return int(best[-1]), f"n_terms = {rule.n_terms}"
     if rule.mode == "tol":
         # at the floor (to its rounding) the fit is exact: no tolerance asks more (1e-30 of noise-free data)
-        exact = unexplained <= round_off * (1.0 + 1e-9)
+        floor = np.broadcast_to(np.asarray(round_off, dtype=float), unexplained.shape)
+        exact = unexplained <= floor * (1.0 + 1e-9)
         reached = np.flatnonzero((unexplained <= rule.tol) | exact)
         if reached.size:
             # the fewest terms within the tolerance (SEMP's pruning may reach it with fewer after more)
             few = reached[sizes[reached] == sizes[reached].min()]
             i = int(few[crit[few] == crit[few].min()][-1])
             return i, (f"{fraction} ≤ {rule.tol:g}" if unexplained[i] <= rule.tol else
-                       f"{fraction} at its round-off floor {round_off:.0e} (an exact fit; tol {rule.tol:g} is "
+                       f"{fraction} at its round-off floor {floor[i]:.0e} (an exact fit; tol {rule.tol:g} is "
                        "below it)")
         last = sizes.size - 1
         # every candidate looked at, or every term the rows allow: a larger max_terms looks at nothing more

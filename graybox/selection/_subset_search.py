@@ -21,8 +21,8 @@ of 1e5 on y, or 1e3 on u, takes past what double precision holds):
   bounds of all its children at once (the RSS after each prefix). The search starts from the swap
   result, so it only ever improves on it, and it proves the answer optimal when it finishes.
 
-RSS below ``floor · yᵀy`` are round-off and treated as equal (see :data:`RSS_FLOOR`; greedy
-FROLS's floor).
+RSS at or below the round-off of an exact fit are treated as equal (see :func:`rss_floor`, greedy FROLS's floor
+too).
 """
 
 from __future__ import annotations
@@ -31,14 +31,54 @@ from dataclasses import dataclass
 from typing import Callable, Sequence
 
 from ..core._jit import nb
+import math
+
 import numpy as np
 
 from ._stopping import FewerTermsError, StopRule
 
-__all__ = ["SubsetProblem", "SearchBudget", "SizePlan", "swap_search", "exact_search", "search_sizes", "RSS_FLOOR"]
+__all__ = ["SubsetProblem", "SearchBudget", "SizePlan", "swap_search", "exact_search", "search_sizes", "ROUND_OFF",
+           "rss_floor", "prefix_floors"]
 
-#: RSS below this fraction of yᵀy is round-off (QR's, as greedy FROLS's floor): such subsets tie.
-RSS_FLOOR = 1e-20
+#: An exact fit's residual sum of squares is round-off of the order of eps² (yᵀy + N (Σ|θ_s|)²), θ_s the parameters of
+#: the unit-RMS columns (N (Σ|θ_s|)² bounds the energy of the model's terms summed in absolute value: terms that cancel
+#: to a small y, as raw monomials of an offset input do, leave the round-off of their own size). Measured by QR and by
+#: MGS at most 7 times that on noise-free plants (N 50 … 1e5, y offsets to 1e8, inputs offset by 1e4 with terms
+#: cancelling to 1e-11 of their size, poles 0.5 and 0.999); the floor is 1e4 times it. A fixed 1e-20 of yᵀy was
+#: 1e11 eps² at once too high (at y ≈ 1e6 a wrong model's RSS, 1.4e-25 yᵀy, counted as an exact fit) and too low
+#: (terms cancelling 1e11-fold: 5e-18 yᵀy).
+ROUND_OFF = 1e4 * np.finfo(float).eps ** 2
+
+
+def rss_floor(yy: float, n_rows: int, theta: np.ndarray, gain: float = 1.0) -> float:
+    """The round-off floor of the RSS of a fit with unit-RMS-column parameters ``theta`` to an output of energy ``yy``
+    on ``n_rows`` rows (see :data:`ROUND_OFF`), times ``gain`` (signals centred after they were recorded keep the
+    round-off of their recorded size: the largest ratio of a signal's mean square as recorded to centred); at most
+    ``yy`` (a fit whose terms are too large for any digit of y to survive explains nothing beyond round-off)."""
+    T = float(np.sum(np.abs(theta)))
+    bound = ROUND_OFF * gain
+    if not T <= math.sqrt(yy / (n_rows * bound)):  # also inf and NaN (a singular factor)
+        return float(yy)
+    return min(bound * (yy + n_rows * T * T), float(yy))
+
+
+def prefix_floors(U: np.ndarray, g: np.ndarray, yy: float, n_rows: int, gain: float = 1.0) -> np.ndarray:
+    """:func:`rss_floor` of the nested fits of the first 1, 2, … K columns of a triangular factor: ``U`` (K × K, upper)
+    of the unit-RMS columns in order, ``g`` (K,) the output's coordinates. One inverse: the leading blocks of U⁻¹ are
+    the inverses of U's leading blocks, so the parameters of the first k columns are U⁻¹[:k, :k] g[:k]."""
+    K = g.size
+    if K == 0:
+        return np.zeros(0)
+    inv = np.zeros((K, K))
+    with np.errstate(all="ignore"):  # a (nearly) singular pivot: inf or NaN parameters, floored at yy
+        # column by column, not a triangular solve with K right-hand sides: that took 15 ms for K = 10 where other
+        # processes held the cores (BLAS threads waiting), 1000 times a column's products here
+        for j in range(K):
+            inv[j, j] = 1.0 / U[j, j]
+            inv[:j, j] = -(inv[:j, :j] @ U[:j, j]) * inv[j, j]
+        theta = np.cumsum(inv * g, axis=1)  # column k-1: the parameters of the first k columns (zero below row k-1)
+        T = np.sum(np.abs(theta), axis=0)
+    return np.array([rss_floor(yy, n_rows, np.array([t]), gain) for t in T])
 
 
 @nb.njit(cache=True, nogil=True, inline="always")  # inlined: a call per column cost 30 % of the search
@@ -245,9 +285,11 @@ class SubsetProblem:
         Candidates the search may use (zero and duplicate columns left out).
     dep_tol : float
         Relative remaining energy below which a column counts as a combination of others.
+    gain : float, optional
+        The round-off gain of centred signals (see :func:`rss_floor`; default 1).
     """
 
-    def __init__(self, R: np.ndarray, yy: float, usable: np.ndarray, dep_tol: float) -> None:
+    def __init__(self, R: np.ndarray, yy: float, usable: np.ndarray, dep_tol: float, gain: float = 1.0) -> None:
         n1 = R.shape[1]
         self.R = np.zeros((n1, n1))
         self.R[: min(R.shape[0], n1)] = R[:n1]
@@ -256,8 +298,28 @@ class SubsetProblem:
         self.yy = float(yy)
         self.usable = np.flatnonzero(usable)
         self.dep_tol = float(dep_tol)
-        self.floor = RSS_FLOOR * self.yy
+        self.gain = float(gain)
+        self.floor = rss_floor(self.yy, 1, np.zeros(0), self.gain)  # until :meth:`settle_floor` finds an exact fit
         self.evaluations = 0
+
+    def settle_floor(self, forced: list[int], k: int, n_rows: int) -> None:
+        """Set the floor at the round-off of the first exact fit on the greedy path from ``forced`` to k terms, if
+        it meets one (:func:`rss_floor` of its parameters: the subsets that fit these noise-free data exactly hold
+        the same terms, with the same round-off); else leave that of yᵀy alone (no subset fits exactly: none ties
+        there)."""
+        S = self.forward(list(forced), k)
+        if not S:
+            return
+        A = np.column_stack([self.R[:, S], self.R[:, -1]])
+        F = np.linalg.qr(A, mode="r")
+        m = len(S)
+        U, g = F[:m, :m], F[:m, m]
+        rest = float(F[m, m] ** 2) if F.shape[0] > m else 0.0
+        rss = rest + np.append(np.cumsum(g[::-1] ** 2)[::-1][1:], 0.0)
+        floors = prefix_floors(U, g, self.yy, n_rows, self.gain)
+        hit = np.flatnonzero((rss <= floors) & (floors < self.yy))
+        if hit.size:
+            self.floor = max(self.floor, float(floors[hit[0]]))
 
     def _run(self, idx: list[int] | np.ndarray, p: int, dep_tol: float | None = None
              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -514,7 +576,7 @@ def search_sizes(problem: SubsetProblem, sizes: list[int], forced: list[int], *,
     rss: list[float] = []
     prev: list[int] = list(forced)
     # a subset at the round-off floor fits exactly and meets any tolerance (one below the floor too)
-    target = max(rule.tol, RSS_FLOOR) * problem.yy if rule.mode == "tol" else None
+    target = max(rule.tol * problem.yy, problem.floor) if rule.mode == "tol" else None
     exhausted = False
     for k in sizes:
         try:

@@ -329,16 +329,45 @@ class StaticConstraint(Relocked, ABC):
 
     @abstractmethod
     def describe(self) -> str:
-        """A short human-readable description used in error messages."""
+        """A short human-readable description used in error messages.
+
+        Returns
+        -------
+        str
+        """
 
     def affine(self, ctx: StaticContext) -> AffineRows | None:
-        """Affine rows in engineering units for the problem ``ctx`` (:class:`StaticContext`), or None when the
-        constraint is not affine."""
+        """Affine rows in engineering units for the problem ``ctx``.
+
+        Parameters
+        ----------
+        ctx : StaticContext
+            The problem's data as the estimator gives them (its structure, static points, curve, Σ*_y and the data's
+            input names).
+
+        Returns
+        -------
+        AffineRows or None
+            ``A_eq θ = b_eq`` and ``A_ub θ <= b_ub``, each row of shape (n_terms,); None when the constraint is not
+            affine.
+        """
         return None
 
     def constraints(self, theta: cp.Expression, ctx: StaticContext) -> list[cp.Constraint]:
-        """cvxpy constraints on ``theta`` (an expression of shape (n_terms,), engineering units) for the
-        problem ``ctx``."""
+        """cvxpy constraints on ``theta`` for the problem ``ctx``.
+
+        Parameters
+        ----------
+        theta : cvxpy.Expression, shape (n_terms,)
+            The parameters, engineering units.
+        ctx : StaticContext
+            The problem's data as the estimator gives them (its structure, static points, curve, Σ*_y and the data's
+            input names).
+
+        Returns
+        -------
+        list of cvxpy.Constraint
+        """
         rows = self.affine(ctx)
         if rows is None:  # pragma: no cover - subclasses that are not affine override this
             raise NotImplementedError(f"{type(self).__name__} must implement constraints()")
@@ -350,9 +379,21 @@ class StaticConstraint(Relocked, ABC):
         return out
 
     def violation(self, theta: np.ndarray, ctx: StaticContext) -> float:
-        """How far ``theta`` is from satisfying the constraint on the problem ``ctx`` (0 when satisfied).
+        """How far ``theta`` is from satisfying the constraint on the problem ``ctx``.
 
-        For affine constraints this is :meth:`AffineRows.violation` (relative, unit-free).
+        Parameters
+        ----------
+        theta : ndarray, shape (n_terms,)
+            Process parameters, engineering units.
+        ctx : StaticContext
+            The problem's data as the estimator gives them (its structure, static points, curve, Σ*_y and the data's
+            input names).
+
+        Returns
+        -------
+        float
+            >= 0, 0 when satisfied. For affine constraints the largest violation of a row relative to the size of its
+            terms (``AffineRows.violation``: unit-free).
         """
         rows = self.affine(ctx)
         if rows is None:  # pragma: no cover - overridden by non-affine subclasses
@@ -360,12 +401,28 @@ class StaticConstraint(Relocked, ABC):
         return rows.violation(theta)
 
     def check(self, ctx: StaticContext) -> None:
-        """Validate against the problem's data ``ctx`` (raises ``ValueError``); called before solving."""
+        """Validate against the problem's data ``ctx`` (raises ``ValueError``); called before solving.
+
+        Parameters
+        ----------
+        ctx : StaticContext
+            The problem's data as the estimator gives them (its structure, static points, curve, Σ*_y and the data's
+            input names).
+        """
         self.affine(ctx)
 
     def after_solve(self, theta: np.ndarray, ctx: StaticContext) -> None:
         """Checks on the estimate ``theta`` of the problem ``ctx`` that the rows cannot express (raises
-        ``ValueError``)."""
+        ``ValueError``).
+
+        Parameters
+        ----------
+        theta : ndarray, shape (n_terms,)
+            Process parameters, engineering units.
+        ctx : StaticContext
+            The problem's data as the estimator gives them (its structure, static points, curve, Σ*_y and the data's
+            input names).
+        """
 
     def __iter__(self) -> Iterator["StaticConstraint"]:
         yield self
@@ -516,8 +573,24 @@ class CurveEquality(StaticConstraint):
         return f"static curve equality (22) to {self.curve.name}{s}"
 
     def resolved_sigma_y(self, ctx: StaticContext) -> float | None:
-        """Σ*_y used: this constraint's, else the problem's (``ctx.sigma_y``); 0 when the structure has no Σy;
-        None when Σ_y is estimated (``"free"``)."""
+        """Σ*_y used: this constraint's, else the problem's (``ctx.sigma_y``).
+
+        Parameters
+        ----------
+        ctx : StaticContext
+            The problem's data as the estimator gives them (its structure, static points, curve, Σ*_y and the data's
+            input names).
+
+        Returns
+        -------
+        float or None
+            Σ*_y (dimensionless); 0 when the structure has no Σy; None when Σ_y is estimated (``"free"``).
+
+        Raises
+        ------
+        ValueError
+            Neither the constraint nor the problem gives Σ*_y.
+        """
         cm = ctx.cluster_map
         if not _has_sigma_y(cm):
             return 0.0  # no linear-in-y cluster: the denominator is 1 − Σ_{yu^m} ū^m → 1
@@ -921,7 +994,19 @@ class StaticBand(StaticConstraint):
                            check_min_denominator(self.min_denominator, "StaticBand: min_denominator", 1.0))
 
     def half_widths(self, pts: StaticPoints) -> np.ndarray:
-        """b at each of ``pts``, shape (M,): ``b``, or the points' own uncertainty when ``b`` is None."""
+        """The band's half-width b at each point.
+
+        Parameters
+        ----------
+        pts : StaticPoints
+            M static points.
+
+        Returns
+        -------
+        ndarray, shape (M,)
+            Output units: ``b``, or the points' own uncertainty when ``b`` is None (``ValueError`` when they carry
+            none).
+        """
         if self.b is not None:
             return np.full(len(pts), self.b)
         if pts.uncertainty is None:
@@ -1152,7 +1237,21 @@ class GainBounds(StaticConstraint):
         return list(zip(side(self.lower, "lower"), side(self.upper, "upper")))
 
     def grid(self, ctx: StaticContext) -> tuple[np.ndarray, np.ndarray]:
-        """The ū grid and the reference ȳ on it for the problem ``ctx``, shapes (K,) or (K, m), and (K,)."""
+        """The ū grid and the reference ȳ on it for the problem ``ctx``.
+
+        Parameters
+        ----------
+        ctx : StaticContext
+            The problem's data as the estimator gives them (its structure, static points, curve, Σ*_y and the data's
+            input names).
+
+        Returns
+        -------
+        ubar : ndarray, shape (K,), or (K, m) with several inputs
+            The grid, input units.
+        ybar : ndarray, shape (K,)
+            The reference static output on it, output units.
+        """
         m = n_static_inputs(ctx.cluster_map)
         if m > 1:
             return self._grid_several(ctx, m)
@@ -1271,7 +1370,23 @@ class GainBounds(StaticConstraint):
     def rows_at(self, ctx: StaticContext, ub: np.ndarray, yb: np.ndarray) -> AffineRows:
         """The bounds' rows at the grid ``ub`` with the reference ``yb`` (:meth:`grid`'s), on the θ of ``ctx``: an
         estimator fitting on the centred signals gives the grid less the signals' offsets, where G and D are the same
-        (derivatives of the static equation) without the offsets' powers."""
+        (derivatives of the static equation) without the offsets' powers.
+
+        Parameters
+        ----------
+        ctx : StaticContext
+            The problem's data as the estimator gives them (its structure, static points, curve, Σ*_y and the data's
+            input names).
+        ub : ndarray, shape (K,), or (K, m) with several inputs
+            The grid, input units.
+        yb : ndarray, shape (K,)
+            The reference static output on it, output units.
+
+        Returns
+        -------
+        AffineRows
+            Inequality rows, each of shape (n_terms,): the denominator bound and the gain bounds at each grid point.
+        """
         cm = ctx.cluster_map
         m = n_static_inputs(cm)
         bounds = self._bounds(m, _input_names(ctx))
@@ -1569,7 +1684,21 @@ class UserConstraint(StaticConstraint):
         return self._call(theta, ctx)
 
     def violation(self, theta: np.ndarray, ctx: StaticContext) -> float:
-        """Largest cvxpy-reported violation at ``theta`` on the problem ``ctx`` (in the constraint's own units)."""
+        """Largest cvxpy-reported violation at ``theta`` on the problem ``ctx``.
+
+        Parameters
+        ----------
+        theta : ndarray, shape (n_terms,)
+            Process parameters, engineering units.
+        ctx : StaticContext
+            The problem's data as the estimator gives them (its structure, static points, curve, Σ*_y and the data's
+            input names).
+
+        Returns
+        -------
+        float
+            >= 0, in the constraint's own units (0 when satisfied).
+        """
         import cvxpy as cp
 
         v = cp.Variable(ctx.n_terms)

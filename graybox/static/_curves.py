@@ -49,17 +49,41 @@ class StaticCurve(Relocked):
 
     @classmethod
     def polynomial(cls, coefficients, domain: tuple[float, float] | None = None, name: str = "static curve") -> "StaticCurve":
-        """A curve from ascending coefficients, e.g. ``StaticCurve.polynomial([κ, α, β])`` for eq. (1), over
-        ``domain`` (ū_min, ū_max) in input units (None: none known), labelled ``name``."""
+        """A curve from ascending coefficients, e.g. ``StaticCurve.polynomial([κ, α, β])`` for eq. (1).
+
+        Parameters
+        ----------
+        coefficients : array_like, shape (degree + 1,)
+            Ascending powers of ū; the k-th in output units per (input unit)^k.
+        domain : (float, float), optional
+            (ū_min, ū_max), input units, the range over which the curve is known (None: none known).
+        name : str, optional
+            Its label (default ``"static curve"``).
+
+        Returns
+        -------
+        StaticCurve
+        """
         return cls(coefficients, domain, name)  # checked there, as every curve's (text refused, not parsed)
 
     @classmethod
     def fit(cls, points: StaticPoints, degree: int = 2, name: str | None = None) -> "StaticCurve":
         """Least-squares polynomial of ``degree`` through static points (columns scaled internally).
 
-        The domain is the points' ū range; ``name`` labels it (default ``"fit to <points' name>"``).
-        Needs at least ``degree + 1`` points, and two at least (one level has no range). ``points`` must
-        be of one input (several: :meth:`StaticSurface.fit`).
+        Parameters
+        ----------
+        points : StaticPoints
+            Of one input (several: :meth:`StaticSurface.fit`); at least ``degree + 1`` points, and two at least
+            (one level has no range).
+        degree : int, optional
+            The polynomial's degree, >= 0 (default 2, eq. (1)).
+        name : str, optional
+            Its label (default ``"fit to <points' name>"``).
+
+        Returns
+        -------
+        StaticCurve
+            Coefficients in the points' units; its domain is the points' ū range.
         """
         if not isinstance(points, StaticPoints):
             raise TypeError(f"StaticCurve.fit: points must be StaticPoints, got {type(points).__name__}")
@@ -82,7 +106,13 @@ class StaticCurve(Relocked):
         return int(nz[-1]) if nz.size else 0
 
     def check_domain(self, ubar: np.ndarray) -> None:
-        """Raise ``ValueError`` if any ū of ``ubar`` lies outside the curve's domain (when it has one)."""
+        """Raise ``ValueError`` if any ū of ``ubar`` lies outside the curve's domain (when it has one).
+
+        Parameters
+        ----------
+        ubar : array_like, any shape
+            Input levels, input units, each finite.
+        """
         if self.domain is None:
             return
         lo, hi = self.domain
@@ -99,7 +129,18 @@ class StaticCurve(Relocked):
         return np.polynomial.polynomial.polyval(ub, self.coefficients)
 
     def gain(self, ubar: np.ndarray) -> np.ndarray:
-        """dH/dū at ``ubar`` (finite, checked against the domain)."""
+        """dH/dū at ``ubar``.
+
+        Parameters
+        ----------
+        ubar : array_like, any shape
+            Input levels, input units, each finite and within the domain (else ``ValueError``).
+
+        Returns
+        -------
+        ndarray, the shape of ``ubar``
+            Gain in output units per input unit.
+        """
         ub = self._levels(ubar)
         return np.polynomial.polynomial.polyval(ub, np.polynomial.polynomial.polyder(self.coefficients))
 
@@ -120,9 +161,21 @@ class StaticCurve(Relocked):
         return ub
 
     def points(self, ubar: np.ndarray, input_name: str = "u") -> StaticPoints:
-        """The curve sampled at ``ubar`` as static points of the input ``input_name`` (a curve is
-        of one input, whatever the records call it: e.g. ``record.input_names[0]``). ``ubar``: a level, or
-        levels of shape (M,) or (M, 1), as :meth:`graybox.Model.static_curve` takes them."""
+        """The curve sampled at ``ubar`` as static points.
+
+        Parameters
+        ----------
+        ubar : float or array_like, shape (M,) or (M, 1)
+            Input levels, input units, as :meth:`graybox.Model.static_curve` takes them.
+        input_name : str, optional
+            The points' input (a curve is of one input, whatever the records call it: e.g.
+            ``record.input_names[0]``; default ``"u"``).
+
+        Returns
+        -------
+        StaticPoints
+            M points (ū, H(ū)), named as the curve.
+        """
         ub = real_array(ubar, "ubar", "input levels (numbers)")
         if ub.ndim == 2 and ub.shape[1] == 1:  # a column: its levels (it was said as "ybar must be 1-D")
             ub = ub[:, 0]

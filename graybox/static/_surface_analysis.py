@@ -147,7 +147,24 @@ class SurfaceClusterMap(Relocked):
         return [surface_cluster_name(k[0], k[1:], self.input_names, "·") for k in self.keys]
 
     def index(self, name_or_key: str | tuple[int, ...]) -> int:
-        """Row of R for the cluster ``name_or_key``: a name (``"Σyu1"``) or a key (p, a_1, …, a_m)."""
+        """Row of R for one cluster.
+
+        Parameters
+        ----------
+        name_or_key : str or tuple of int
+            A cluster's name (``"Σyu1"``, its factors in any order, or ASCII ``"Syu1"``) or its key
+            (p, a_1, …, a_m), the powers in ``input_names`` order.
+
+        Returns
+        -------
+        int
+            The cluster's row of R (and entry of ``keys`` and ``names``).
+
+        Raises
+        ------
+        ValueError
+            No cluster of that name or key, or a name that fits several.
+        """
         if isinstance(name_or_key, tuple):
             # m_<input> in the order the powers are read (the data's input order), named: a key written in another
             # order was told "(p, a_b, a_a)", which read as inputs named a_b and a_a

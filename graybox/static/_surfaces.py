@@ -177,11 +177,15 @@ class StaticSurface(Relocked):
         coefficients : mapping
             Exponent vector (one entry per input) to coefficient.
         domain : sequence of (low, high), optional
-            Box per input where the surface is known.
+            Box per input where the surface is known, input units.
         name : str
             Label.
         input_names : sequence of str, optional
-            Input names (default u1 … um).
+            Input names (default u1 … um; ``u`` for one input).
+
+        Returns
+        -------
+        StaticSurface
         """
         if not coefficients:
             raise ValueError(f"{name}: give at least one monomial")
@@ -215,6 +219,11 @@ class StaticSurface(Relocked):
             The surface's inputs, in the order of its exponents' entries (default: the points').
             The points' own names in another order take the points' columns by name; new names
             rename the points' inputs in their order.
+
+        Returns
+        -------
+        StaticSurface
+            Coefficients in the points' units.
 
         Notes
         -----
@@ -283,7 +292,19 @@ class StaticSurface(Relocked):
         return max((sum(e) for e, c in zip(self.exponents, self.coefficients) if c != 0.0), default=0)
 
     def coefficient(self, exponent: Sequence[int]) -> float:
-        """c_e of the monomial with exponent vector ``exponent`` (0 when the surface has none)."""
+        """c_e of one monomial.
+
+        Parameters
+        ----------
+        exponent : sequence of int, length m
+            The monomial's exponent vector, one power >= 0 per input.
+
+        Returns
+        -------
+        float
+            Its coefficient, output units per product of input units to those powers (0 when the surface has
+            none).
+        """
         # integer powers only: int(1.7) read another monomial's coefficient
         e = tuple(check_int(v, "exponent", low=0) for v in check_sequence(exponent, "exponent", "an exponent vector"))
         if len(e) != self.n_inputs:
@@ -294,13 +315,25 @@ class StaticSurface(Relocked):
             return 0.0
 
     def as_dict(self) -> dict[tuple[int, ...], float]:
-        """``{exponent vector: coefficient}``."""
+        """The polynomial as a dict.
+
+        Returns
+        -------
+        dict of tuple of int to float
+            ``{exponent vector: coefficient}``, one entry per monomial.
+        """
         return {e: float(c) for e, c in zip(self.exponents, self.coefficients)}
 
     # -- evaluation ---------------------------------------------------------
     def check_domain(self, ubar: np.ndarray) -> None:
-        """Raise ``ValueError`` if any point of ``ubar`` (shape (M, m)) lies outside the domain box (when there
-        is one)."""
+        """Raise ``ValueError`` if any point of ``ubar`` lies outside the domain box (when there is one).
+
+        Parameters
+        ----------
+        ubar : array_like or pandas.DataFrame, shape (K, m), or (m,) for one point
+            Points of input levels, input units: columns in ``input_names`` order (a DataFrame whose columns are the
+            ``input_names`` is read by name), each finite.
+        """
         if self.domain is None:
             return
         u = _as_inputs(ubar, self.n_inputs, self.name, self.input_names)
@@ -318,7 +351,19 @@ class StaticSurface(Relocked):
         return _monomials(u, self.exponents) @ self.coefficients
 
     def gradient(self, ubar: np.ndarray) -> np.ndarray:
-        """∂H/∂ū_j at points ``ubar`` of shape (K, m); returns shape (K, m), one column per input."""
+        """∂H/∂ū_j at points ``ubar``.
+
+        Parameters
+        ----------
+        ubar : array_like or pandas.DataFrame, shape (K, m), or (m,) for one point
+            Points of input levels, input units: columns in ``input_names`` order (a DataFrame whose columns are the
+            ``input_names`` is read by name), each finite, within the domain.
+
+        Returns
+        -------
+        ndarray, shape (K, m)
+            One column per input, output units per that input's unit.
+        """
         u = _as_inputs(ubar, self.n_inputs, self.name, self.input_names)
         self.check_domain(u)
         out = np.zeros(u.shape)
@@ -331,12 +376,30 @@ class StaticSurface(Relocked):
         return out
 
     def points(self, ubar: np.ndarray) -> StaticPoints:
-        """The surface sampled at ``ubar`` (shape (K, m)) as static points."""
+        """The surface sampled at ``ubar`` as static points.
+
+        Parameters
+        ----------
+        ubar : array_like or pandas.DataFrame, shape (K, m), or (m,) for one point
+            Points of input levels, input units: columns in ``input_names`` order (a DataFrame whose columns are the
+            ``input_names`` is read by name), each finite, within the domain.
+
+        Returns
+        -------
+        StaticPoints
+            K points (ū, H(ū)) of the surface's inputs, named as the surface.
+        """
         u = _as_inputs(ubar, self.n_inputs, self.name, self.input_names)
         return StaticPoints(u if self.n_inputs > 1 else u[:, 0], self(u), name=self.name, input_names=self.input_names)
 
     def describe(self) -> str:
-        """The polynomial as text, e.g. ``"-1.3 + 0.0015 u1 + 7.3e-06 u1*u2"``."""
+        """The polynomial as text.
+
+        Returns
+        -------
+        str
+            E.g. ``"-1.3 + 0.0015 u1 + 7.3e-06 u1*u2"`` (six significant digits).
+        """
         parts = []
         for e, c in zip(self.exponents, self.coefficients):
             mono = "*".join(n if v == 1 else f"{n}^{v}" for n, v in zip(self.input_names, e) if v)
