@@ -510,3 +510,31 @@ def test_only_the_cells_an_older_graybox_made_alike_are_said_to_run_again_for_th
 def test_compare_results_wants_a_sequence_of_paths():
     with pytest.raises(TypeError, match="stores must be a sequence of two or more store paths"):
         gx.compare_results("results.sqlite")
+
+
+def _pumping_in(y_unit: str, scale: float = 1.0) -> gb.Dataset:
+    """The bundled plant with its output said to be in ``y_unit`` (its numbers times ``scale``)."""
+    d = gb.load_pumping()
+
+    def rec(r):
+        return gb.Record(r.u, r.y * scale, Ts=r.Ts, name=r.name, units=("rpm", y_unit))
+
+    s = d.static
+    return gb.Dataset(rec(d.ident), rec(d.valid), gb.StaticPoints(s.ubar, s.ybar * scale, uncertainty=s.uncertainty
+                                                                   * scale, units=("rpm", y_unit)))
+
+
+def test_a_report_says_the_unit_of_the_spec_it_reads_not_the_first_specs(tmp_path):
+    # hunt62e: the first spec's unit of a data set was said for every spec read (spec 1 in kPa, spec 2, the latest,
+    # in Pa: the latest's J_S, J_SF and B were said in kPa²)
+    path = tmp_path / "s.sqlite"
+    gx.run_grid(grid((LS,), data=[gx.DataSpec("p", dataset=_pumping_in("kPa"))], structures=(FIRST,)), path)
+    # the same numbers, their unit said right now; another grid (CLS too)
+    run = gx.run_grid(grid((LS, CLS), data=[gx.DataSpec("p", dataset=_pumping_in("Pa"))], structures=(FIRST,)), path)
+    assert run.spec == 2
+    for spec, unit in ((1, "kPa"), (2, "Pa"), ("latest", "Pa"), ("all", "Pa")):
+        df = gx.load_results(path, spec=spec)
+        lines = "\n".join(_summary_lines(df, gx.leaderboard(df), "dsf_valid", df.attrs, None))
+        said = set(re.findall(r"(?<![A-Za-z])(k?Pa)²", lines))
+        assert said == {unit}, (spec, lines)
+

@@ -1054,12 +1054,18 @@ def _all_rows(conn: sqlite3.Connection, cols: str, bands: Mapping[int, Mapping[s
 
 def output_units(attrs: Mapping) -> dict[str, str]:
     """Each data set's output unit, by name, from the specs of the results' ``attrs`` (empty when the specs
-    stored none: data without units, or a store written before the specs kept them)."""
+    stored none: data without units, or a store written before the specs kept them): the spec read first (``attrs``'
+    ``selection``), then the others, the one run last first (a spec that says its data's unit again, corrected, is
+    the latest word on it; the first spec's was said of every spec read)."""
     if "y_units" in attrs:
         return dict(attrs["y_units"])
     out: dict[str, str] = {}
-    for info in attrs.get("specs", ()):
-        spec = info.get("spec") if isinstance(info, Mapping) else None
+    sel = attrs.get("selection")
+    infos = [i for i in attrs.get("specs", ()) if isinstance(i, Mapping)]
+    infos.sort(key=lambda i: (isinstance(sel, (int, np.integer)) and i.get("id") == sel, str(i.get("last_run", "")),
+                              i.get("id") if isinstance(i.get("id"), int) else 0), reverse=True)
+    for info in infos:
+        spec = info.get("spec")
         for d in (spec.get("data", ()) if isinstance(spec, Mapping) else ()):
             if isinstance(d, Mapping) and isinstance(d.get("y_unit"), str) and d["y_unit"]:
                 out.setdefault(str(d.get("name")), d["y_unit"])
