@@ -538,3 +538,22 @@ def test_a_report_says_the_unit_of_the_spec_it_reads_not_the_first_specs(tmp_pat
         said = set(re.findall(r"(?<![A-Za-z])(k?Pa)²", lines))
         assert said == {unit}, (spec, lines)
 
+
+def test_a_spec_that_corrects_only_its_datas_unit_is_a_new_spec_reported_in_it(tmp_path):
+    # hunt62e: the unit is in no cell's key, so the spec with the unit corrected had the fingerprint of the one it
+    # corrects: the run reused that spec, and every report went on saying the old unit (Pa² for kPa²)
+    path = tmp_path / "s.sqlite"
+    gx.run_grid(grid((LS,), data=[gx.DataSpec("p", dataset=_pumping_in("Pa"))], structures=(FIRST,)), path)
+    fixed = grid((LS,), data=[gx.DataSpec("p", dataset=_pumping_in("kPa"))], structures=(FIRST,))
+    run = gx.run_grid(fixed, path)
+    assert (run.spec, run.ran, run.skipped) == (2, 0, 1)  # the cell is reused: the same numbers
+    assert any("output in kPa in this spec, in Pa in the store's spec of the same cells" in n for n in run.notes), \
+        run.notes
+    for spec, unit in ((1, "Pa"), ("latest", "kPa")):
+        df = gx.load_results(path, spec=spec)
+        lines = "\n".join(_summary_lines(df, gx.leaderboard(df), "dsf_valid", df.attrs, None))
+        assert set(re.findall(r"(?<![A-Za-z])(k?Pa)²", lines)) == {unit}, (spec, lines)
+    again = gx.run_grid(fixed, path)  # the corrected spec again: itself, no third
+    assert again.spec == 2 and len(gx.store_specs(path)) == 2
+    assert gx.run_grid(grid((LS,), data=[gx.DataSpec("p", dataset=_pumping_in("Pa"))], structures=(FIRST,)),
+                       path).spec == 1

@@ -362,6 +362,9 @@ def _notes(st: ResultStore, cells, done: Mapping[str, str], version: str) -> lis
     for name, (was, now) in (st.band_changes if st.new_spec else {}).items():
         out.append(f"data set {name!r}: band {_band(now)} in this spec, {_band(was)} in the store's spec of the same "
                    "cells: its results are read, and ranked, with this spec's")
+    for name, (was, now) in (st.unit_changes if st.new_spec else {}).items():
+        out.append(f"data set {name!r}: output in {now or 'no unit'} in this spec, in {was or 'no unit'} in the "
+                   "store's spec of the same cells: its results are reported in this spec's")
     hashes = {c.data: c.data_hash for c in cells}
     for name, h in hashes.items():
         if st.known_data and name not in st.known_data:

@@ -439,11 +439,15 @@ class ResultStore:
         Data set names the store held before, by content hash.
     band_changes : dict
         Data set name -> (its band in the store's spec of the same cells, this spec's), where they differ.
+    unit_changes : dict
+        Data set name -> (its output's unit in the store's spec of the same cells, this spec's; "" for none), where
+        they differ.
     """
 
     def __init__(self, path: Path, conn: sqlite3.Connection, meta: Mapping[str, str], spec_id: int, new_spec: bool,
                  known_data: Mapping[str, str],
-                 band_changes: Mapping[str, tuple[float | None, float | None]] | None = None):
+                 band_changes: Mapping[str, tuple[float | None, float | None]] | None = None,
+                 unit_changes: Mapping[str, tuple[str, str]] | None = None):
         self.path = path
         self._conn = conn
         self.meta = dict(meta)
@@ -451,6 +455,7 @@ class ResultStore:
         self.new_spec = new_spec
         self.known_data = dict(known_data)
         self.band_changes = dict(band_changes or {})
+        self.unit_changes = dict(unit_changes or {})
         self._owner: str | None = None
 
     @classmethod
@@ -545,12 +550,12 @@ class ResultStore:
             if migrate:
                 _upgrade(conn, p, meta, cells)
                 meta["format_version"] = FORMAT_VERSION
-            spec_id, new, changed = _register(conn, p, grid_name, fingerprint, spec, cells, version)
+            spec_id, new, changed, unit_changes = _register(conn, p, grid_name, fingerprint, spec, cells, version)
         except BaseException as exc:
             conn.close()
             _refuse_unwritable(exc, p)
             raise
-        return cls(p, conn, meta, spec_id, new, known, changed)
+        return cls(p, conn, meta, spec_id, new, known, changed, unit_changes)
 
     @contextlib.contextmanager
     def running(self):
@@ -812,8 +817,10 @@ def _upgrade(conn: sqlite3.Connection, p: Path, meta: Mapping[str, str], cells: 
 
 
 def _register(conn: sqlite3.Connection, p: Path, grid_name: str, fingerprint: str, spec: Mapping[str, Any],
-              cells: Sequence[Cell], version: str) -> tuple[int, bool, dict[str, tuple[float | None, float | None]]]:
-    """(spec id, new, bands changed: data set name -> (band of the spec of the same cells, this one's)): the spec's row and its cells, written before any of them runs.
+              cells: Sequence[Cell], version: str) -> tuple[int, bool, dict[str, tuple[float | None, float | None]],
+                                                            dict[str, tuple[str, str]]]:
+    """(spec id, new, bands changed: data set name -> (band of the spec of the same cells, this one's), output units
+    changed: the same with units): the spec's row and its cells, written before any of them runs.
 
     The same cells under the same names with other bands (no variant reading them: the cells' keys do not say them)
     are another spec: the rows read back, and the reports rank, with the band of the spec they are read with."""
@@ -826,9 +833,16 @@ def _register(conn: sqlite3.Connection, p: Path, grid_name: str, fingerprint: st
         bands = _spec_bands({"spec": json.dumps(spec)})
         changed: dict[str, tuple[float | None, float | None]] = {}
         old = None if row is None else _spec_bands({"spec": row[1]})
-        if old is not None and old != bands:
+        # the output's unit is in no cell's key (the same numbers), but every report says it: a spec that says another
+        # than the stored spec named is another spec (one that named none, also a spec stored before specs kept
+        # units, is not contradicted)
+        old_units = {} if row is None else _spec_units(json.loads(row[1]))
+        units = _spec_units(spec)
+        unit_changes = {k: (old_units[k], u) for k, u in units.items() if old_units.get(k) not in ("", None, u)}
+        if old is not None and (old != bands or unit_changes):
             changed = {k: (old.get(k), b) for k, b in bands.items() if old.get(k) != b}
-            fingerprint = _hash({"grid": fingerprint, "bands": bands})
+            # (a fingerprint whose bands alone differ is hashed as before)
+            fingerprint = _hash({"grid": fingerprint, "bands": bands, **({"y_units": units} if unit_changes else {})})
             row = conn.execute("SELECT id, spec FROM specs WHERE fingerprint = ?", (fingerprint,)).fetchone()
         now = _now()
         if row is not None:
@@ -847,7 +861,13 @@ def _register(conn: sqlite3.Connection, p: Path, grid_name: str, fingerprint: st
         conn.execute("ROLLBACK")
         raise
     conn.execute("COMMIT")
-    return spec_id, new, changed
+    return spec_id, new, changed, unit_changes
+
+
+def _spec_units(spec: Mapping[str, Any]) -> dict[str, str]:
+    """Each data set's output unit in a canonical spec (:func:`graybox.experiments._spec.stored_spec`), by name
+    ("" where it names none)."""
+    return {d["name"]: d.get("y_unit", "") for d in spec.get("data", []) if isinstance(d, Mapping) and "name" in d}
 
 
 def _plain(v: Any) -> Any:
