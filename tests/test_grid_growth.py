@@ -557,3 +557,20 @@ def test_a_spec_that_corrects_only_its_datas_unit_is_a_new_spec_reported_in_it(t
     assert again.spec == 2 and len(gx.store_specs(path)) == 2
     assert gx.run_grid(grid((LS,), data=[gx.DataSpec("p", dataset=_pumping_in("Pa"))], structures=(FIRST,)),
                        path).spec == 1
+
+
+@pytest.mark.parametrize("column, value", [("status", "OK"), ("theta", "[1, 2"), ("JS_valid", "abc")])
+def test_a_run_refuses_untouched_a_store_whose_cell_it_would_reuse_is_damaged(base_store, tmp_path, column, value):
+    # hunt62e: the run read a cell's key and status only: a damaged cell (edited in an SQLite browser) was reused,
+    # "4 reused, 0 run now; 4 ok" (3 ok with status 'OK', the fourth cell in no count), and every report then
+    # refused the store as damaged
+    path, before = _edited(base_store, tmp_path, "d.sqlite",
+                           f"UPDATE cells SET {column} = '{value}' WHERE variant = 'LS' AND structure = 'first-order'")
+    with pytest.raises(gx.StoreError) as load_err:
+        gx.load_results(path)
+    with pytest.raises(gx.StoreError) as err:
+        gx.run_grid(grid(), path)
+    msg = str(err.value)
+    assert "is damaged" in msg and "'first-order' / 'LS'" in msg and "nothing was written to it" in msg, msg
+    assert msg.split("; nothing was written")[0] == str(load_err.value).split("; restore")[0]  # the reader's words
+    assert path.read_bytes() == before

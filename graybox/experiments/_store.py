@@ -270,6 +270,18 @@ def _read_meta(conn: sqlite3.Connection, path: Path, reading: bool = False) -> d
     return meta
 
 
+def _check_held(conn: sqlite3.Connection, p: Path, cells: Sequence[Cell]) -> None:
+    """A StoreError (for a run: nothing was written) when a row the store holds of ``cells``, which a run reuses,
+    does not read back as every report reads it (:func:`_decode_row`): the run reused it and counted it ok, or in
+    no status, and every report then refused the store."""
+    keys = list(dict.fromkeys(c.key for c in cells))
+    for i in range(0, len(keys), 500):  # SQLite's bound on a statement's parameters
+        part = keys[i:i + 500]
+        cur = conn.execute(f"SELECT {', '.join(COLUMNS)} FROM cells WHERE key IN ({', '.join('?' * len(part))})", part)
+        for r in cur.fetchall():
+            _decode_row(dict(zip(COLUMNS, r)), p, reading=False)
+
+
 def _damaged(p: Path, what: str, reading: bool) -> StoreError:
     """A store whose text SQLite's integrity check cannot judge (a spec's or a cell's JSON) does not read back."""
     return StoreError(f"{p} is damaged: {what}; " + ("restore it from a copy" if reading else
@@ -515,6 +527,7 @@ class ResultStore:
                     for s in specs:
                         for name, h in json.loads(s["data"]).items():
                             known.setdefault(name, h)
+                _check_held(ro, p, cells)
             except sqlite3.DatabaseError as exc:
                 raise StoreError(f"{p} is damaged ({exc}); nothing was written to it; {_DAMAGED}") from None
             finally:
@@ -1159,6 +1172,42 @@ def running_cells(path: str | os.PathLike) -> dict[str, int]:
 _NO_BAND_RULES = frozenset({"min J_SF", "min correlation"})
 
 
+def _decode_row(r: dict[str, Any], p: Path, reading: bool = True) -> None:
+    """A cell's row as read from the store ``p``, decoded in place (JSON columns, numbers, flags), or a StoreError
+    naming the cell and what is damaged (``reading``: for a reader; else for a run, which wrote nothing)."""
+    cell = f"the cell {r['data']!r} / {r['structure']!r} / {r['variant']!r}"
+    if r["status"] not in STATUSES:  # what every count and reason of the reports is made of
+        raise _damaged(p, f"{cell} has status {r['status']!r}, none of {', '.join(STATUSES)}", reading)
+    r["terms"] = None if r["terms"] is None else tuple(_json_of(r["terms"], p, f"{cell}'s terms", list, reading))
+    r["theta"] = None if r["theta"] is None else _json_of(r["theta"], p, f"{cell}'s theta", list, reading)
+    r["warnings"] = () if r["warnings"] is None else tuple(_json_of(r["warnings"], p, f"{cell}'s warnings", list,
+                                                                    reading))
+    for c in ("terms", "warnings"):  # texts, as a cell writes them (the report joins them)
+        if r[c] is not None and not all(isinstance(t, str) for t in r[c]):
+            raise _damaged(p, f"{cell}'s {c} are not all texts", reading)
+    members = None if r["members"] is None else _json_of(r["members"], p, f"{cell}'s members", dict, reading)
+    try:  # numbers where numbers are stored (SQLite keeps whatever a column is given)
+        r["theta"] = None if r["theta"] is None else np.array(r["theta"], dtype=float)
+        if r["theta"] is not None and r["theta"].ndim != 1:
+            raise ValueError(f"theta of shape {r['theta'].shape}, not one number per term")
+        r["members"] = None if members is None else _decode_members(members)
+        # a flag and counts as a cell writes them: bool() took any text for True, int() cut 1.5 to 1
+        if r["in_band"] is not None and (isinstance(r["in_band"], bool) or r["in_band"] not in (0, 1)):
+            raise ValueError(f"in_band {r['in_band']!r}, not 0 or 1")
+        r["in_band"] = None if r["in_band"] is None else bool(r["in_band"])
+        if r["in_band"] and r["rule"] in _NO_BAND_RULES:
+            r["in_band"] = None  # written before 7937b3f8 (the cell's key unchanged, never rerun): no band read
+        for c in ("seed", "n_params"):
+            if r[c] is not None and (isinstance(r[c], bool) or not isinstance(r[c], int)):
+                raise ValueError(f"{c} {r[c]!r}, not an integer")
+        r["seed"] = None if r["seed"] is None else int(r["seed"])
+        r["n_params"] = None if r["n_params"] is None else int(r["n_params"])
+        for c in _FLOAT_COLUMNS:
+            r[c] = None if r[c] is None else float(r[c])
+    except (TypeError, ValueError) as exc:
+        raise _damaged(p, f"{cell} holds a value that is not what its column holds ({exc})", reading) from None
+
+
 def load_results(path: str | os.PathLike, *, spec: str | int = "latest") -> pd.DataFrame:
     """The cells of a grid store as a DataFrame, one row per cell, in grid order.
 
@@ -1206,36 +1255,7 @@ def load_results(path: str | os.PathLike, *, spec: str | int = "latest") -> pd.D
     meta, specs, rows, chosen, n_cells = read_store(path, spec)
     p = Path(path)
     for r in rows:
-        cell = f"the cell {r['data']!r} / {r['structure']!r} / {r['variant']!r}"
-        if r["status"] not in STATUSES:  # what every count and reason of the reports is made of
-            raise _damaged(p, f"{cell} has status {r['status']!r}, none of {', '.join(STATUSES)}", True)
-        r["terms"] = None if r["terms"] is None else tuple(_json_of(r["terms"], p, f"{cell}'s terms", list))
-        r["theta"] = None if r["theta"] is None else _json_of(r["theta"], p, f"{cell}'s theta", list)
-        r["warnings"] = () if r["warnings"] is None else tuple(_json_of(r["warnings"], p, f"{cell}'s warnings", list))
-        for c in ("terms", "warnings"):  # texts, as a cell writes them (the report joins them)
-            if r[c] is not None and not all(isinstance(t, str) for t in r[c]):
-                raise _damaged(p, f"{cell}'s {c} are not all texts", True)
-        members = None if r["members"] is None else _json_of(r["members"], p, f"{cell}'s members", dict)
-        try:  # numbers where numbers are stored (SQLite keeps whatever a column is given)
-            r["theta"] = None if r["theta"] is None else np.array(r["theta"], dtype=float)
-            if r["theta"] is not None and r["theta"].ndim != 1:
-                raise ValueError(f"theta of shape {r['theta'].shape}, not one number per term")
-            r["members"] = None if members is None else _decode_members(members)
-            # a flag and counts as a cell writes them: bool() took any text for True, int() cut 1.5 to 1
-            if r["in_band"] is not None and (isinstance(r["in_band"], bool) or r["in_band"] not in (0, 1)):
-                raise ValueError(f"in_band {r['in_band']!r}, not 0 or 1")
-            r["in_band"] = None if r["in_band"] is None else bool(r["in_band"])
-            if r["in_band"] and r["rule"] in _NO_BAND_RULES:
-                r["in_band"] = None  # written before 7937b3f8 (the cell's key unchanged, never rerun): no band read
-            for c in ("seed", "n_params"):
-                if r[c] is not None and (isinstance(r[c], bool) or not isinstance(r[c], int)):
-                    raise ValueError(f"{c} {r[c]!r}, not an integer")
-            r["seed"] = None if r["seed"] is None else int(r["seed"])
-            r["n_params"] = None if r["n_params"] is None else int(r["n_params"])
-            for c in _FLOAT_COLUMNS:
-                r[c] = None if r[c] is None else float(r[c])
-        except (TypeError, ValueError) as exc:
-            raise _damaged(p, f"{cell} holds a value that is not what its column holds ({exc})", True) from None
+        _decode_row(r, p)
     df = pd.DataFrame(rows, columns=list(COLUMNS))
     front = ["data", "structure", "variant", "seed", "estimator", "status", "message"]
     df = df[front + [c for c in df.columns if c not in front]]
