@@ -138,3 +138,28 @@ def test_the_fronts_say_how_many_models_a_panel_leaves_out(inf_member_store):
 
 def test_the_fronts_of_finite_models_are_titled_by_their_structure_alone(store):
     assert [ax.get_title() for ax in gx.plot_fronts(store).axes if ax.get_visible()] == [f"s{i}" for i in range(5)]
+
+
+def test_the_page_never_shows_two_models_ranked_apart_with_one_figure(store):
+    # hunt62e: report.html printed every figure to 4 digits: two structures whose J_S differ by 1e-5 (relative),
+    # ranked 1 and 2 apart, both read "0.5252" beside a page saying that models whose J_S agree share a rank
+    import re
+
+    from graybox.experiments._html import report_page
+
+    df = gb.load_results(store)
+    first, second = df.index[:2]
+    df.loc[second, "JS_valid"] = df.loc[first, "JS_valid"] * (1 + 1e-5)
+    df.loc[second, "fit_valid"] = df.loc[first, "fit_valid"] - 1e-4
+    lb = gx.leaderboard(df, rule="chosen")
+    page = report_page(df, lb, rule="chosen", summary=[], figures={})
+    board = page.split('<h2 id="leaderboard">')[1].split("</table>")[0]
+    rows = {}
+    for tr in re.findall(r"<tr>(.*?)</tr>", board)[1:]:
+        cells = re.findall(r"<td[^>]*>(.*?)</td>", tr)
+        rows[cells[1]] = cells
+    a, b = rows[df.loc[first, "structure"]], rows[df.loc[second, "structure"]]
+    assert a[3] != b[3]  # ranked apart
+    assert a[4] != b[4] and float(a[4]) < float(b[4])  # JS_valid
+    assert a[7] != b[7] and float(a[7]) > float(b[7])  # fit_valid
+    assert len(a[4].replace(".", "").lstrip("0")) <= 7  # no more digits than tell them apart
