@@ -574,3 +574,16 @@ def test_a_run_refuses_untouched_a_store_whose_cell_it_would_reuse_is_damaged(ba
     assert "is damaged" in msg and "'first-order' / 'LS'" in msg and "nothing was written to it" in msg, msg
     assert msg.split("; nothing was written")[0] == str(load_err.value).split("; restore")[0]  # the reader's words
     assert path.read_bytes() == before
+
+
+def test_stores_compared_are_counted_as_stores(base_store, tmp_path):
+    # hunt62e: summary.txt and report.html of two stores compared said "8 of 8 cells in the store"
+    from graybox.experiments._html import report_page
+
+    df = gx.compare_results([base_store, copy_of(base_store, tmp_path)])
+    lb = gx.leaderboard(df)
+    head = _summary_lines(df, lb, "dsf_valid", df.attrs, None)[0]
+    assert "8 of 8 cells in the 2 stores;" in head, head
+    assert "<p>8 of 8 cells in the 2 stores: " in report_page(df, lb, rule="dsf_valid", summary=[], figures={})
+    one = gx.load_results(base_store)
+    assert "4 of 4 cells in the store;" in _summary_lines(one, gx.leaderboard(one), "dsf_valid", one.attrs, None)[0]

@@ -17,7 +17,7 @@ import pandas as pd
 
 from ..core._reprs import squared_unit
 from ._cell import STATUSES
-from ._store import output_units
+from ._store import held_text, output_units
 
 __all__ = ["report_page"]
 
@@ -130,7 +130,7 @@ def report_page(df: pd.DataFrame, lb: pd.DataFrame, *, rule: str, summary: Seque
     counts = df["status"].value_counts()
     parts = [f"<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>{_e(title)}</title>"
              f"<style>{_CSS}</style></head><body><h1>{_e(title)}</h1>"]
-    parts.append("<p>" + _e(f"{len(df)} of {attrs.get('n_cells', len(df))} cells in the store: ") + ", ".join(
+    parts.append("<p>" + _e(f"{held_text(len(df), attrs)}: ") + ", ".join(
         f'<span class="{"st-ok" if s == "ok" else "st-bad"}">{int(counts.get(s, 0))} {_e(s)}</span>'
         for s in STATUSES) + _e(f". Ranking rule: {rule}.") + "</p>")
     # the reasons first: what did not work, and why

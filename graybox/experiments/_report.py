@@ -37,7 +37,7 @@ from ..core._reprs import beside, bound_text, level_texts, squared_unit
 from ..core._validation import (FrozenFrame, FrozenMap, check_bool, check_choice, check_fields, check_int, check_path,
                                 check_real, check_sequence, check_str)
 from ._cell import STATUSES
-from ._store import compare_results, encode_value, load_results, output_units, running_cells
+from ._store import compare_results, encode_value, held_text, load_results, output_units, running_cells
 
 __all__ = ["RULES", "GridStatus", "grid_status", "leaderboard", "heatmap_table", "plot_scatter", "plot_fronts", "plot_heatmap", "write_report"]
 
@@ -1042,7 +1042,7 @@ def _summary_lines(df: pd.DataFrame, lb: pd.DataFrame, rule: str, attrs: Mapping
     counts = df["status"].value_counts()
     fp = attrs.get("fingerprint")
     lines = [f"grid {attrs.get('grid')!r} ({f'fingerprint {fp}, ' if fp else ''}graybox "
-             f"{attrs.get('version')}): {len(df)} of {attrs.get('n_cells', len(df))} cells in the store; "
+             f"{attrs.get('version')}): {held_text(len(df), attrs)}; "
              + ", ".join(f"{int(counts.get(s, 0))} {s}" for s in STATUSES),
              f"ranking rule: {rule}"]
     units = output_units(attrs) or output_units(df.attrs)

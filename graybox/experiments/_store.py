@@ -1105,6 +1105,14 @@ def output_units(attrs: Mapping) -> dict[str, str]:
     return out
 
 
+def held_text(n_rows: int, attrs: Mapping) -> str:
+    """"k of n cells in the store" for results of ``n_rows`` rows with ``attrs``; "in the m stores" for stores
+    compared (their specs carry their labels), whose cells were said to be in "the store"."""
+    labels = {s["store"] for s in attrs.get("specs") or () if isinstance(s, Mapping) and "store" in s}
+    where = f"the {len(labels)} stores" if len(labels) > 1 else "the store"
+    return f"{n_rows} of {attrs.get('n_cells', n_rows)} cells in {where}"
+
+
 def _spec_info(s: Mapping[str, Any]) -> dict[str, Any]:
     return {"id": s["id"], "name": s["name"], "created": s["created"], "last_run": s["last_run"],
             "version": s["graybox_version"], "n_cells": s["n_cells"], "fingerprint": s["fingerprint"],
