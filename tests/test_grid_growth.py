@@ -587,3 +587,19 @@ def test_stores_compared_are_counted_as_stores(base_store, tmp_path):
     assert "<p>8 of 8 cells in the 2 stores: " in report_page(df, lb, rule="dsf_valid", summary=[], figures={})
     one = gx.load_results(base_store)
     assert "4 of 4 cells in the store;" in _summary_lines(one, gx.leaderboard(one), "dsf_valid", one.attrs, None)[0]
+
+
+def test_a_store_whose_spec_row_was_deleted_is_refused_untouched_not_a_traceback(base_store, tmp_path):
+    # hunt62e: a spec's row deleted (an SQLite browser) left its spec_cells: the next new spec took its number and
+    # the run ended in sqlite3.IntegrityError 'UNIQUE constraint failed: spec_cells.spec, spec_cells.position'
+    path = copy_of(base_store, tmp_path)
+    gx.run_grid(grid((LS,), structures=(FIRST,)), path)  # spec 2
+    con = sqlite3.connect(path)
+    con.execute("DELETE FROM specs WHERE id = 2")
+    con.commit()
+    con.close()
+    before = path.read_bytes()
+    with pytest.raises(gx.StoreError, match=r"is damaged: its spec_cells table holds the cells of spec\(s\) \[2\], "
+                                            r"which its specs table lacks; nothing was written to it"):
+        gx.run_grid(grid((CLS,), structures=(FIRST,)), path)
+    assert path.read_bytes() == before

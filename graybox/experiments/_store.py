@@ -524,6 +524,13 @@ class ResultStore:
                 else:
                     specs = _specs(ro, meta, p, reading=False)
                     _check_growth(p, specs, cells, version)
+                    # a spec's row deleted (an SQLite browser): its number, which its cells keep, would be the next
+                    # spec's, whose cells then clashed with them (sqlite3.IntegrityError, a traceback)
+                    lost = [r[0] for r in ro.execute("SELECT DISTINCT spec FROM spec_cells WHERE spec NOT IN "
+                                                     "(SELECT id FROM specs) ORDER BY spec")]
+                    if lost:
+                        raise _damaged(p, f"its spec_cells table holds the cells of spec(s) {lost}, which its specs "
+                                       "table lacks", False)
                     for s in specs:
                         for name, h in json.loads(s["data"]).items():
                             known.setdefault(name, h)
