@@ -603,3 +603,23 @@ def test_a_store_whose_spec_row_was_deleted_is_refused_untouched_not_a_traceback
                                             r"which its specs table lacks; nothing was written to it"):
         gx.run_grid(grid((CLS,), structures=(FIRST,)), path)
     assert path.read_bytes() == before
+
+
+def test_summary_figures_keep_six_digits_and_their_side_of_the_band(base_store):
+    # hunt62e: summary.txt printed its table with pandas' 6 decimals: in bar (J's near 1e-4 bar²) a J_SF of
+    # 6.3e-6 read 0.000006, and one of 0.00021078597 ranked within B = 0.000210786 read 0.000211, above it
+    df = gx.load_results(base_store)
+    k2 = 0.0980665**2  # the plant in bar
+    for c in ("J1_ident", "JS_ident", "J1_valid", "JS_valid", "JSF", "band"):
+        df[c] = df[c] * k2
+    B = float(df.loc[df["variant"] == "CLS", "JSF"].max()) * (1 + 1e-7)
+    lb = gx.leaderboard(df, band=B)
+    lines = _summary_lines(df, lb, "dsf_valid", df.attrs, B)
+    text = "\n".join(lines)
+    said_b = float(re.search(r"J_SF ≤ B = (\S+)", text).group(1))
+    rows = [ln.split()[-4:] for ln in text.splitlines() if re.fullmatch(r".*\s\d+", ln) and len(ln.split()) >= 5]
+    assert len(rows) == int(lb["JS_valid"].notna().sum()) >= 2, text
+    for js, jsf, fit, _ in rows:
+        assert float(jsf) <= said_b, text
+        for said, col in ((js, "JS_valid"), (jsf, "JSF"), (fit, "fit_valid")):
+            assert np.nanmin(np.abs(lb[col].to_numpy(float) / float(said) - 1)) < 6e-6, (said, text)

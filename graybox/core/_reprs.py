@@ -14,8 +14,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
-__all__ = ["beside", "bound_text", "level_texts", "listed", "percent_text", "point_texts", "range_text", "share_text",
-           "short_repr", "summary", "LISTED"]
+__all__ = ["apart_digits", "beside", "bound_text", "level_texts", "listed", "percent_text", "point_texts",
+           "range_text", "share_text", "short_repr", "summary", "LISTED"]
 
 #: A field's text longer than this is summarised.
 WIDTH = 48
@@ -169,6 +169,38 @@ def squared_text(value: float, unit: str | None, digits: int = 4) -> str:
     """A squared error as text with its unit (``squared_unit``): "1.158 mlc²"; NaN and inf without one."""
     value = float(value)
     return f"{value:.{digits}g}" + (squared_unit(unit) if np.isfinite(value) else "")
+
+
+#: Relative difference below which two figures of a table may print alike: a report's tie (models whose J_S agree to
+#: it share a rank).
+APART_RTOL = 1e-8
+
+
+def apart_digits(values: np.ndarray, low: int = 6, high: int = 17) -> int:
+    """Significant digits (``%.{d}g``) for a table's column of ``values``: ``low``, or as many more as print every two
+    values that differ by more than :data:`APART_RTOL` (relative) apart (two models ranked 1 and 2 read "0.8109"
+    both at 4 digits).
+
+    Parameters
+    ----------
+    values : ndarray
+        The column's numbers (NaN and infinities are left out).
+    low, high : int
+        The fewest and the most digits.
+
+    Returns
+    -------
+    int
+    """
+    v = np.unique(np.asarray(values, float))
+    v = v[np.isfinite(v)]
+    a, b = v[:-1], v[1:]
+    apart = (b - a) > APART_RTOL * np.maximum(np.abs(a), np.abs(b))
+    a, b = a[apart], b[apart]  # neighbours suffice: rounding keeps the order
+    for d in range(low, high):
+        if all(f"{x:.{d}g}" != f"{y:.{d}g}" for x, y in zip(a, b)):
+            return d
+    return high
 
 
 def beside(value: float, ref: float, digits: int = 4) -> str:

@@ -12,10 +12,9 @@ import platform
 import sys
 from typing import Mapping, Sequence
 
-import numpy as np
 import pandas as pd
 
-from ..core._reprs import squared_unit
+from ..core._reprs import apart_digits, squared_unit
 from ._cell import STATUSES
 from ._store import held_text, output_units
 
@@ -47,24 +46,6 @@ def _text(v: object) -> str:
     return "—" if _missing(v) else _e(v)
 
 
-#: Relative difference below which two figures may print alike: the leaderboard's tie (models whose J_S agree to it
-#: share a rank).
-_APART_RTOL = 1e-8
-
-
-def _digits(values: np.ndarray, low: int = 4, high: int = 12) -> int:
-    """Significant digits for a column of ``values``: ``low``, or as many more as print every two values that differ
-    by more than :data:`_APART_RTOL` (relative) apart (two models ranked 1 and 2 read "0.8109" both)."""
-    v = np.unique(values[np.isfinite(values)])
-    a, b = v[:-1], v[1:]
-    apart = (b - a) > _APART_RTOL * np.maximum(np.abs(a), np.abs(b))
-    a, b = a[apart], b[apart]  # neighbours suffice: rounding keeps the order
-    for d in range(low, high):
-        if all(f"{x:.{d}g}" != f"{y:.{d}g}" for x, y in zip(a, b)):
-            return d
-    return high
-
-
 def _num(v: object, digits: int = 4) -> str:
     if _missing(v):
         return "—"  # a missing figure: the row's reason says why
@@ -79,7 +60,7 @@ def _table(df: pd.DataFrame, *, index: bool = True, text_cols: Sequence[str] = (
     # text: left-aligned and escaped as is; numbers: formatted, a missing one as a dash
     text = [c in text_cols or not pd.api.types.is_numeric_dtype(d[c]) for c in d.columns]
     head = "".join(f'<th class="t">{_e(c)}</th>' if t else f"<th>{_e(c)}</th>" for c, t in zip(d.columns, text))
-    digits = [4 if t or not pd.api.types.is_float_dtype(d[c]) else _digits(d[c].to_numpy(float))
+    digits = [4 if t or not pd.api.types.is_float_dtype(d[c]) else apart_digits(d[c].to_numpy(float), low=4)
               for c, t in zip(d.columns, text)]
     body = []
     for _, r in d.iterrows():

@@ -33,7 +33,7 @@ from matplotlib.ticker import LogLocator, MaxNLocator, NullFormatter, ScalarForm
 from matplotlib.figure import Figure
 
 from ..plots._data import distinct_colours
-from ..core._reprs import beside, bound_text, level_texts, squared_unit
+from ..core._reprs import apart_digits, beside, bound_text, level_texts, squared_unit
 from ..core._validation import (FrozenFrame, FrozenMap, check_bool, check_choice, check_fields, check_int, check_path,
                                 check_real, check_sequence, check_str)
 from ._cell import STATUSES
@@ -1034,6 +1034,15 @@ def _replace_manifest(folder: Path, written: Sequence[Path]) -> None:
     manifest.write_text("".join(f"{n}\n" for n in names), encoding="utf-8")
 
 
+def _figures_text(frame: pd.DataFrame, index: bool = True) -> str:
+    """A table of figures as text: each float column to 6 significant digits, or as many more as print every two of
+    its values apart (pandas' 6 decimals read a J_SF of 6.3e-6 bar² as 0.000006, and one within B = 0.000210786
+    as 0.000211, above it)."""
+    fmt = {c: (lambda x, n=apart_digits(frame[c].to_numpy(float)): " " + ("NaN" if pd.isna(x) else f"{x:#.{n}g}"))
+           for c in frame.columns if pd.api.types.is_float_dtype(frame[c])}
+    return frame.to_string(index=index, formatters=fmt)
+
+
 def _summary_lines(df: pd.DataFrame, lb: pd.DataFrame, rule: str, attrs: Mapping | None = None,
                    band: float | Mapping[str, float] | None = None) -> list[str]:
     """summary.txt: counts, the best five per data set (and how many are ranked), within which band, and every
@@ -1062,7 +1071,7 @@ def _summary_lines(df: pd.DataFrame, lb: pd.DataFrame, rule: str, attrs: Mapping
         if unit and len(sub):  # what the columns are, in which units
             lines.append(f"  (JS_valid: J_S on the validation record, JSF: J_SF on the static points, both in {unit}; "
                          "fit_valid in %)")
-        lines.append(sub[["JS_valid", "JSF", "fit_valid", "n_params"]].to_string() if len(sub) else
+        lines.append(_figures_text(sub[["JS_valid", "JSF", "fit_valid", "n_params"]]) if len(sub) else
                      "  (no model qualified: the reasons follow)")
         n_ranked = int(part["JS_valid"].notna().sum())
         if n_ranked > len(sub):  # the rest are not dropped: say where they are
@@ -1192,7 +1201,7 @@ class GridStatus:
         yet = "" if self.left == 0 and not self.running else " yet"  # (a finished grid waits for nothing)
         if len(self.best):
             lines.append("best so far:")
-            lines += ["  " + ln for ln in self.best.reset_index().to_string(index=False).splitlines()]
+            lines += ["  " + ln for ln in _figures_text(self.best.reset_index(), index=False).splitlines()]
             told = {d: squared_unit(self.units.get(d)).strip() for d in self.best.index}
             if any(told.values()):
                 lines.append("  (JS_valid: J_S on the validation record, JSF: J_SF on the static points; in " +
