@@ -622,3 +622,13 @@ def test_summary_figures_keep_six_digits_and_their_side_of_the_band(base_store):
         assert float(jsf) <= said_b, text
         for said, col in ((js, "JS_valid"), (jsf, "JSF"), (fit, "fit_valid")):
             assert np.nanmin(np.abs(lb[col].to_numpy(float) / float(said) - 1)) < 6e-6, (said, text)
+
+
+def test_stores_that_give_the_same_data_two_units_are_not_compared_under_one(tmp_path):
+    # hunt62e: a store whose data set 'p' says kPa and one whose 'p', the same numbers, says Pa were compared, and the
+    # report said every J in the unit of the store run last (Pa²), the other's word dropped without a note
+    a, b = tmp_path / "a.sqlite", tmp_path / "b.sqlite"
+    for path, unit in ((a, "kPa"), (b, "Pa")):
+        gx.run_grid(grid((LS,), data=[gx.DataSpec("p", dataset=_pumping_in(unit))], structures=(FIRST,)), path)
+    with pytest.raises(gx.StoreError, match=r"data set 'p'.*in kPa.*in Pa.*the same numbers"):
+        gx.compare_results([a, b])

@@ -1428,6 +1428,15 @@ def compare_results(
                                  f"(content hashes {h} and {seen[name][0]}): their results are not comparable. "
                                  "Compare stores run on the same data, or rename the data set in one spec")
             seen.setdefault(name, (h, p))
+    said: dict[str, tuple[str, Path]] = {}
+    for p, df in zip(paths, frames):  # the same numbers (hashes checked above) in two units: one store mislabels them
+        for name, unit in output_units(df.attrs).items():
+            if name in said and said[name][0] != unit:
+                raise StoreError(f"{said[name][1]} gives data set {name!r} in {said[name][0]}, {p} in {unit}, for the "
+                                 "same numbers (equal content hashes): one of them says a wrong unit, and the report "
+                                 "would say either's of both. Run the spec with the right units on that store (a new "
+                                 "spec: its cells are reused), then compare")
+            said.setdefault(name, (unit, p))
     names = [set(df["data"]) for df in frames]
     if all(n for n in names) and not set.intersection(*names):
         raise StoreError("the stores share no data set ("
