@@ -39,7 +39,7 @@ import pandas as pd
 import scipy.linalg
 
 from ..core._gram import triangular_factor
-from ..core._least_squares import (binary_scaled, column_scales, one_blas_thread, output_scale,
+from ..core._least_squares import (binary_scaled, column_scales, one_blas_thread, output_scale, rank_tolerance,
                                    refuse_beyond_float_range, unscaled_levels, unscaled_theta)
 from ..core._regressors import refuse_non_finite_columns, stacked_regressors
 from ..core._simulation_kernels import batch_sse, encode, input_products, record_inputs
@@ -172,8 +172,19 @@ class _Scorer:
         # columns, reduced by QR, with QR's accuracy; a Gram matrix SᵀS squares the conditioning (u in
         # [1000, 1002] put noise-free θ 3 % off, y about 1e6 made the true terms 'collinear')
         self.R = triangular_factor(psi, y, self.s)
-        del psi
         self.own = np.einsum("ij,ij->j", self.R[:, :-1], self.R[:, :-1])  # ‖s_j‖²: N, or 0 for a zero column
+        # what a candidate holds beyond its mean, ‖s_j − mean‖², the reference of the rank test (an offset is no
+        # information: y(k-1) beside y(k-2) at y near 1e6, rho 0.999, added 7.6e-8 of its raw norm, 9e-4 without
+        # the offset, and was called collinear); a column constant to round-off (the constant, u² of a two-level
+        # input) is judged on its whole norm
+        with np.errstate(over="ignore", under="ignore"):
+            centred = y.size * np.var(psi / np.where(self.s > 0, self.s, 1.0), axis=0)
+        del psi
+        # and more than √eps of its raw norm: a fit conditioned past 1/√eps carries more round-off than digits (its
+        # κ² term), and u + 1e4, y − 1e5 with degree-2 monomials then gave inexact 6-term structures, not the offsets'
+        # note (centre=True) of a search that runs out of terms
+        self.eps = max(rank_tolerance(1.0, y.size, len(process)), math.sqrt(np.finfo(float).eps))
+        self.ref = np.where(centred > self.eps**2 * self.own, centred, self.own)
         # the tolerance's scale: var(y), or for a constant output its mean square (not 1 output unit²)
         self.yvar = output_scale(y) ** 2
         # free-run errors below this are round-off, not signal: such structures tie (noise-free data). In ulps of the
@@ -182,15 +193,20 @@ class _Scorer:
         # (1.6e5 ulps) for an exact one, and scored it 1e-8 for its 1.2e-9
         self.floor = ROUND_OFF_MS * max(float(np.mean(y**2)), np.finfo(float).tiny)
 
-    def fit(self, S: Sequence[int]) -> np.ndarray | None:
-        """θ (engineering units, full candidate length) of the LS fit of terms S, or None if singular."""
+    def independent(self, d: np.ndarray, cols: np.ndarray, rank_tol: float) -> np.ndarray:
+        """Whether columns ``cols``, adding ``d`` (squared norm) beyond the terms before them, are independent of
+        those: more than ``rank_tol`` of what each holds beyond its mean, and more than round-off of its norm."""
+        return (d > rank_tol**2 * self.ref[cols]) & (d > self.eps**2 * self.own[cols])
+
+    def fit(self, S: Sequence[int], rank_tol: float) -> np.ndarray | None:
+        """θ (engineering units, full candidate length) of the LS fit of terms S, or None if singular (a term
+        collinear with those before it, by the rank test of :meth:`bordered`)."""
         S = list(S)
         th = np.zeros(len(self.process))
         if not S:
             return th
         Q, R = np.linalg.qr(self.R[:, S])
-        d = np.abs(np.diag(R))
-        if d.min() <= 1e-7 * d.max():
+        if not np.all(self.independent(np.diag(R) ** 2, np.array(S), rank_tol)):
             return None
         with np.errstate(over="ignore"):  # a θ beyond the float range is inf (scored as a diverging run)
             th[S] = scipy.linalg.solve_triangular(R, Q.T @ self.R[:, -1]) / self.s[S]
@@ -219,7 +235,7 @@ class _Scorer:
         ty = Q.T @ self.R[:, -1]
         V, w = T[:k], ty[:k]  # (k, C), (k,)
         d = np.sum(T[k:] ** 2, axis=0)
-        ok = (d > rank_tol**2 * Gcc) & ~self.zero[cands]
+        ok = self.independent(d, cands, rank_tol) & ~self.zero[cands]
         dd = np.where(ok, d, 1.0)
         zc = (T[k:].T @ ty[k:]) / dd
         ZS = scipy.linalg.solve_triangular(R, w[:, None] - V * zc[None, :])  # (k, C)
@@ -309,8 +325,10 @@ def semp(
         A term is removed when the score without it is at most ``(1 + prune_tol)`` times the
         current score (0: removal must not hurt at all).
     rank_tol : float
-        A candidate whose scaled column adds less than ``rank_tol`` of its norm to the current
-        structure is collinear with it and is not tried at that step.
+        A candidate whose column adds less than ``rank_tol`` of what it holds beyond its mean (of its
+        norm, for a constant column) to the current structure is collinear with it and is not tried at
+        that step (nor is one adding no more than round-off of its norm); an offset of the signals
+        makes no column collinear.
     threads : int
         Threads of the batched free runs.
     centre : bool, optional
@@ -533,7 +551,7 @@ class _Search:
         zero = [self.names[j] for j in opt.forced if sc.zero[j]]
         if zero:  # in frols's words: one zero column is not 'collinear'
             raise ValueError(f"included term {zero[0]} cannot be used on these data: all-zero column")
-        th = sc.fit(self.current)
+        th = sc.fit(self.current, opt.rank_tol)
         if th is None:
             raise ValueError(f"the included terms {[self.names[j] for j in opt.forced]} are collinear on these data")
         if not np.all(np.isfinite(th)):
@@ -648,7 +666,7 @@ def _prune(run: _Search, added: int) -> None:
         removable = [j for j in run.current if j not in opt.forced and j != added]
         trial = []
         for j in removable:
-            t_ = sc.fit([i for i in run.current if i != j])
+            t_ = sc.fit([i for i in run.current if i != j], opt.rank_tol)
             trial.append(t_ if t_ is not None else np.full(len(opt.process), np.nan))
         if not trial:
             break
