@@ -201,3 +201,57 @@ def test_a_slow_plant_at_an_offset_gets_its_true_structure(level, u_unit, y_unit
         res = gb.semp(SLOW_CANDIDATES, rec, **kw)
         assert set(res.structure) == set(true), kw
         assert res.score < 1e-12 * np.var(rec.y[3:])
+
+
+def _exact_subsets_by_hand(rec, candidates):
+    """Every subset of ``candidates`` (y(k-1), y(k-2) and input terms) whose least-squares fit runs ``rec`` exactly
+    (free-run MSE below 1e-20 of var y) from y(0), y(1): numpy's lstsq, and a free run written out (for the subsets
+    exact one step ahead, which every exact free run is)."""
+    import itertools
+
+    L, y, u = 2, rec.y, rec.u
+    cols = {"y(k-1)": y[1:-1], "y(k-2)": y[:-2], "u(k-1)": u[1:-1], "u(k-2)": u[:-2], "u(k-1)^2": u[1:-1] ** 2,
+            "u(k-2)^2": u[:-2] ** 2}
+    exact, tiny = [], 1e-20 * np.var(y[L:])
+    names = [str(t) for t in candidates]
+    for k in range(1, len(names) + 1):
+        for sub in itertools.combinations(names, k):
+            X = np.column_stack([cols[n] for n in sub])
+            theta = np.linalg.lstsq(X, y[L:], rcond=None)[0]
+            if np.mean((X @ theta - y[L:]) ** 2) > tiny:
+                continue
+            a = dict(zip(sub, theta))
+            x = sum(a[n] * cols[n] for n in sub if n.startswith("u")) + np.zeros(len(y) - L)
+            sim = list(y[:L])
+            for k_ in range(L, len(y)):
+                sim.append(a.get("y(k-1)", 0.0) * sim[-1] + a.get("y(k-2)", 0.0) * sim[-2] + x[k_ - L])
+            if np.mean((np.array(sim[L:]) - y[L:]) ** 2) < tiny:
+                exact.append(set(sub))
+    return exact
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_the_smallest_exact_structure_wins_the_tie_at_the_round_off_floor(seed):
+    # noise-free y(k) = 0.99 y(k-1) + 0.5 u(k-1) + 0.2 u(k-1)^2: y(k-2), u(k-1), u(k-2), u(k-1)^2, u(k-2)^2 runs as
+    # exactly (y(k-1) eliminated); semp reached those five first, and no removal keeps them exact while y(k-1), a
+    # combination of them, is collinear with them: tol=1e-30 ('at its round-off floor') and bic ('bic minimum at 5
+    # of 6 sizes') returned the five terms, n_terms=3 an inexact structure
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(-1.0, 1.0, 201), 10)[:2000]
+    true = Structure(["y(k-1)", "u(k-1)", "u(k-1)^2"])
+    rec = Record(u, Model(true, [0.99, 0.5, 0.2]).simulate(u, [0.0]))
+    cands = Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)", "u(k-1)^2", "u(k-2)^2"])
+    exact = _exact_subsets_by_hand(rec, cands)
+    smallest = min(len(s) for s in exact)
+    assert [s for s in exact if len(s) == smallest] == [{str(t) for t in true}]  # the case: one smallest, others
+    assert any(len(s) == 5 and "y(k-1)" not in s for s in exact)
+    for kw in ({"tol": 1e-30}, {}, {"n_terms": 3}):
+        res = gb.semp(cands, rec, **kw)
+        assert set(res.structure) == set(true), kw
+        np.testing.assert_allclose(res.theta[[res.structure.index(t) for t in true]], [0.99, 0.5, 0.2], rtol=1e-9)
+    # the path still changes size by one per step, and each add is its forward step's score
+    adds = res.path[res.path["action"] == "add"]
+    assert np.all(np.abs(np.diff(res.path["n_terms"])) == 1)
+    for k, (_, row) in enumerate(adds.iterrows()):
+        assert res.forward_scores.iloc[k][row["term"]] == row["score"]
+

@@ -15,7 +15,13 @@ pruning"): start from the included terms (default none); then repeat
    best removal does not increase the score by more than ``prune_tol`` (relative), remove that term
    (never the term just added, nor an included one);
 
-until the stopping rule holds. All candidates of one step are scored at once by the compiled
+until the stopping rule holds. On noise-free data a structure can run exactly (at the round-off floor)
+while a smaller one does too, and no removal reaches it (y(k-2), u(k-1), u(k-2), u(k-1)², u(k-2)² beside
+the true y(k-1), u(k-1), u(k-1)²: y(k-1), a combination of the five, is collinear with them): there the
+search swaps a term for a candidate that keeps the run exact when a removal then does too (the path
+shows the swap as a removal and an addition), so the smallest exact structure wins the tie.
+
+All candidates of one step are scored at once by the compiled
 population kernel: every candidate model is a member of a population of the full candidate
 structure, with zeros for the terms it does not hold, so one batched free run per record scores
 a whole step. The least-squares fits of all candidates of a step come from one QR factorisation
@@ -597,11 +603,19 @@ def _grow(run: _Search) -> tuple[str, bool]:
     while True:
         cands = np.array([j for j in range(len(opt.process)) if j not in run.current and not sc.zero[j]], dtype=int)
         stop, capped = _stop_reason(run, cands)
-        if stop:
-            break
-        added = _add(run, cands)
+        added = None if stop else _add(run, cands)
         if added is None:
-            stop = "no candidate improves: every extension diverges, is collinear or was visited"
+            # an exact structure (at the round-off floor) that no removal keeps exact may still not be the smallest:
+            # noise-free, y(k-2), u(k-1), u(k-2), u(k-1)^2, u(k-2)^2 runs as exactly as the true y(k-1), u(k-1),
+            # u(k-1)^2, and y(k-1), a combination of those five, adds nothing to them (collinear); a swap reaches it
+            if opt.prune and n_add < budget and run.score <= sc.floor:
+                tried = None if stop else run.fwd.pop()  # the failed step's scores: the swap's step stands for it
+                if _exchange(run):
+                    n_add += 1
+                    continue
+                if tried is not None:
+                    run.fwd.append(tried)
+            stop = stop or "no candidate improves: every extension diverges, is collinear or was visited"
             break
         n_add += 1
         if opt.prune and n_add <= budget:
@@ -657,6 +671,43 @@ def _add(run: _Search, cands: np.ndarray) -> int | None:
     added = int(cands[pick])
     run.move("add", added, run.current + [added], thetas[pick], float(s_c[pick]))
     return added
+
+
+def _exchange(run: _Search) -> bool:
+    """At the round-off floor: swap a term j of the structure for a candidate c where S − j + c is exact too and a
+    term of it can then be removed at the floor; take the steps (remove j, add c, prune). Whether it did."""
+    opt, sc = run.opt, run.sc
+    S = run.current
+    cands = np.array([j for j in range(len(opt.process)) if j not in S and not sc.zero[j]], dtype=int)
+    if cands.size == 0:
+        return False
+    for j in [k for k in S if k not in opt.forced]:
+        base = [k for k in S if k != j]
+        thetas = sc.bordered(base, cands, opt.rank_tol)
+        s_c = sc.scores(thetas)
+        tied = np.flatnonzero(s_c <= sc.floor)
+        for i in tied:
+            c = int(cands[i])
+            swapped = base + [c]
+            if frozenset(swapped) in run.visited:
+                continue
+            # a removal at the floor after the swap (never of c, as pruning removes): else the swap gains nothing
+            trial = [sc.fit([k for k in swapped if k != r], opt.rank_tol) for r in swapped if r not in opt.forced
+                     and r != c]
+            trial = np.array([t if t is not None else np.full(len(opt.process), np.nan) for t in trial])
+            if not trial.size or not np.any(sc.scores(trial) <= sc.floor):
+                continue
+            th_base = sc.fit(base, opt.rank_tol)
+            if th_base is None:
+                continue
+            run.move("remove", j, base, th_base, float(sc.scores(th_base)[0]))
+            row = np.full(len(opt.process), np.nan)
+            row[cands] = s_c
+            run.fwd.append(row)  # a forward step from S − j: its candidates' scores, as _add keeps them
+            run.move("add", c, swapped, thetas[i], float(s_c[i]))
+            _prune(run, c)
+            return True
+    return False
 
 
 def _prune(run: _Search, added: int) -> None:
