@@ -255,3 +255,22 @@ def test_the_smallest_exact_structure_wins_the_tie_at_the_round_off_floor(seed):
     for k, (_, row) in enumerate(adds.iterrows()):
         assert res.forward_scores.iloc[k][row["term"]] == row["score"]
 
+
+@pytest.mark.parametrize("rho,level,y_unit", [(0.9999, 1e6, 1.0), (0.99999, 0.0, 1.0), (0.99999, 0.0, 1e3)])
+def test_the_round_off_floor_grows_with_the_free_runs_error_amplification(rho, level, y_unit):
+    # 20000 samples of a slow plant: an exact structure's least-squares free run errs by some 1/(1 - rho) ulps of the
+    # output's RMS (each step's rounding, and θ's, carried on for as many steps), up to 1.7e4 here, past the fixed
+    # (2^13 ulps)^2 floor: exact structures no longer tied, and tol=1e-30 and bic returned 5 or 6 terms (at rho
+    # 0.99999, y + 1e6, tol=1e-30 'not reached')
+    rec, true = slow_offset_record(level, y_unit=y_unit, rho=rho, n=20000)
+    eps, ms = np.finfo(float).eps, np.mean(rec.y[3:] ** 2)
+    X = np.column_stack([np.ones(len(rec) - 3), rec.y[2:-1], rec.u[2:-1], rec.u[2:-1] ** 2])
+    theta = np.linalg.lstsq(X, rec.y[3:], rcond=None)[0]
+    sim = Model(true, theta).simulate(rec.u[2:], rec.y[2:3])
+    ulps = np.sqrt(np.mean((sim[1:] - rec.y[3:]) ** 2) / ms) / eps
+    assert 1e2 < ulps < 1e5  # by hand: round-off, hundreds to thousands of ulps
+    res = gb.semp(SLOW_CANDIDATES, rec, tol=1e-30)
+    assert set(res.structure) == set(true) and "round-off floor" in res.stop
+    assert set(gb.semp(SLOW_CANDIDATES, rec).structure) == set(true)
+    # the floor, an exact run's score in ulps of the level: above what the run erred, below 1e3 times it
+    assert ulps < np.sqrt(res.score / ms) / eps < 1e3 * ulps

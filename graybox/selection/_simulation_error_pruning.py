@@ -60,8 +60,12 @@ from ..core._validation import (Relocked, FrozenFrame, check_bool, check_choice,
 
 __all__ = ["semp", "SEMPResult"]
 
-#: The free-run MSE that is round-off, as a fraction of the output's mean square: (2^13 ulps)^2.
-ROUND_OFF_MS = (2.0**13 * np.finfo(float).eps) ** 2
+#: The free-run RMS error that is round-off at least, in ulps of the output's RMS level (fast plants).
+ROUND_OFF_ULPS = 2.0**13
+#: The free-run MSE that is round-off at least, as a fraction of the output's mean square: (2^13 ulps)^2.
+ROUND_OFF_MS = (ROUND_OFF_ULPS * np.finfo(float).eps) ** 2
+#: Ulps of round-off per unit of the free run's error amplification (exact runs erred up to 4 per unit: a margin of 8).
+ROUND_OFF_GAIN = 2.0**5
 
 
 @dataclass(frozen=True, eq=False)
@@ -154,7 +158,7 @@ class _Scorer:
         self.L = L = process.max_lag
         self.code = code = encode(process)
         self.threads = threads
-        blocks, targets = [], []
+        blocks, targets, slopes = [], [], []
         self.U = []
         require_lengths(records, L)
         for r in records:
@@ -162,6 +166,7 @@ class _Scorer:
             self.U.append(U)
             with np.errstate(over="ignore", invalid="ignore"):  # a product beyond the float range: named below
                 blocks.append(_psi(code, U, r.y, L))
+                slopes.append(_output_slopes(code, U, r.y, L).sum(axis=0))  # summed: no second N × C array
             targets.append(r.y[L:])
         psi = np.vstack(blocks)
         y = np.concatenate(targets)
@@ -194,10 +199,14 @@ class _Scorer:
         # the tolerance's scale: var(y), or for a constant output its mean square (not 1 output unit²)
         self.yvar = output_scale(y) ** 2
         # free-run errors below this are round-off, not signal: such structures tie (noise-free data). In ulps of the
-        # output's level, where round-off lives: exact structures' runs erred by up to 2.4e3 ulps RMS (slow plants,
-        # rho 0.999, 2000 samples, y + 1e6); 1e-20 of the mean square (4.5e5 ulps) took a run 3.5e-5 off at y near 1e6
+        # output's level, where round-off lives, times the free run's error amplification: an exact structure's run
+        # of y(k) = c + rho y(k-1) + b u(k-1) + d u(k-1)^2 erred by up to 4 ulps RMS × min(1/(1 − rho), N) for rho
+        # 0.9 … 0.99999, N 2000 and 20000, y + 0 and + 1e6 (1.7e4 ulps at rho 0.9999, N 20000: past a fixed 2^13), and
+        # by up to 38 ulps on fast plants; 1e-20 of the mean square (4.5e5 ulps) took a run 3.5e-5 off at y near 1e6
         # (1.6e5 ulps) for an exact one, and scored it 1e-8 for its 1.2e-9
-        self.floor = ROUND_OFF_MS * max(float(np.mean(y**2)), np.finfo(float).tiny)
+        gain = _amplification(self.R, np.sum(slopes, axis=0) / y.size, self.s, max(len(r) - L for r in records))
+        self.floor = (ROUND_OFF_MS * max(1.0, ROUND_OFF_GAIN * gain / ROUND_OFF_ULPS) ** 2
+                      * max(float(np.mean(y**2)), np.finfo(float).tiny))
 
     def independent(self, d: np.ndarray, cols: np.ndarray, rank_tol: float) -> np.ndarray:
         """Whether columns ``cols``, adding ``d`` (squared norm) beyond the terms before them, are independent of
@@ -266,6 +275,34 @@ class _Scorer:
         return out
 
 
+def _output_slopes(code, U: np.ndarray, y: np.ndarray, L: int) -> np.ndarray:
+    """Each candidate's derivative by the past outputs, summed over its lags (Σ_i ∂ψ/∂y(k−i), from measured y), rows
+    L … N−1: a model's θ · their mean is the sum of its output coefficients, linearised along the record."""
+    out = np.zeros((y.size - L, code.ny.size))
+    for t in range(code.ny.size):
+        for d in range(code.ny[t]):  # the product rule: the factor y(k - lag_d) left out, the others kept
+            f = U[L:, t].copy()
+            for e in range(code.ny[t]):
+                if e != d:
+                    f *= y[L - code.ylag[t, e]: y.size - code.ylag[t, e]]
+            out[:, t] += f
+    return out
+
+
+def _amplification(R: np.ndarray, slope: np.ndarray, s: np.ndarray, longest: int) -> float:
+    """How much the free run amplifies an error: 1 / |1 − σ|, σ the sum of the output coefficients (linearised) of
+    the least-squares fit of every candidate (the least-norm one where they are collinear), at most the longest
+    record's scored samples (an error grows at most so many steps), at least 1. ``slope``: each candidate's mean
+    :func:`_output_slopes`, shape (n,)."""
+    if not np.any(slope):
+        return 1.0
+    theta = scipy.linalg.lstsq(R[:, :-1], R[:, -1], cond=np.finfo(float).eps * R.shape[0])[0]
+    with np.errstate(all="ignore"):
+        sigma = float(np.nansum(theta / np.where(s > 0, s, 1.0) * slope))
+    gap = abs(1.0 - sigma)
+    return float(min(max(longest, 1), max(1.0, 1.0 / gap if gap > 0 and math.isfinite(gap) else math.inf)))
+
+
 def _psi(code, U: np.ndarray, y: np.ndarray, L: int) -> np.ndarray:
     """Candidate regressors from measured y: input products × output monomials, rows L … N−1."""
     psi = U[L:].copy()
@@ -313,8 +350,11 @@ def semp(
     n_terms : int, optional
         Size of the structure to return.
     tol : float, optional
-        Relative free-run error in (0, 1) that ends the search (met too by a free run at round-off,
-        (2^13 ulps)² of the output's mean square, 3.3e-24 of it: an exact fit meets a tolerance below it).
+        Relative free-run error in (0, 1) that ends the search (met too by a free run at round-off:
+        (2^13 ulps)² of the output's mean square, 3.3e-24 of it, or (32 ulps × the free run's error
+        amplification)² where that is more, the amplification 1 / |1 − σ| of the least-squares fit of every
+        candidate, σ its output coefficients' sum, at most the record's length: an exact fit meets a
+        tolerance below it).
     criterion : {"aic", "bic", "fpe", "ebic"}, optional
         Information criterion of the free-run error (see :func:`graybox.information_criterion`; default
         ``"bic"``; EBIC's p counts the candidates besides the included ones, the all-zero ones and those
