@@ -274,3 +274,54 @@ def test_the_round_off_floor_grows_with_the_free_runs_error_amplification(rho, l
     assert set(gb.semp(SLOW_CANDIDATES, rec).structure) == set(true)
     # the floor, an exact run's score in ulps of the level: above what the run erred, below 1e3 times it
     assert ulps < np.sqrt(res.score / ms) / eps < 1e3 * ulps
+
+
+_HAND_TERMS = {"1": lambda y, u, k: 1.0, "y(k-1)": lambda y, u, k: y[k - 1], "y(k-2)": lambda y, u, k: y[k - 2],
+               "u(k-1)": lambda y, u, k: u[k - 1], "u(k-2)": lambda y, u, k: u[k - 2],
+               "u(k-1)^2": lambda y, u, k: u[k - 1] ** 2, "u(k-1)y(k-1)": lambda y, u, k: u[k - 1] * y[k - 1],
+               "y(k-1)^2": lambda y, u, k: y[k - 1] ** 2}
+
+
+def _semp_by_hand(y, u, n_max, L=2):
+    """Simulation-error pruning written out: numpy's lstsq, a free run from y(0), y(1), forward by the smallest
+    free-run MSE among unvisited structures, then remove the term whose removal hurts least while it does not."""
+    def score(S):
+        X = np.array([[_HAND_TERMS[n](y, u, k) for n in S] for k in range(L, len(y))])
+        theta = np.linalg.lstsq(X, y[L:], rcond=None)[0]
+        sim = list(y[:L])
+        for k in range(L, len(y)):
+            sim.append(sum(t * _HAND_TERMS[n](sim, u, k) for t, n in zip(theta, S)))
+            if abs(sim[-1]) > 1e6 * np.max(np.abs(y)):
+                return np.inf  # diverging
+        return float(np.mean((np.array(sim[L:]) - y[L:]) ** 2))
+
+    S, path, visited = [], [], {frozenset()}
+    while len(S) < n_max:
+        tried = {c: score(S + [c]) for c in _HAND_TERMS if c not in S}
+        c = min((c for c in tried if frozenset(S + [c]) not in visited), key=tried.get)
+        S, current = S + [c], tried[c]
+        visited.add(frozenset(S))
+        path.append(("add", c))
+        while len(S) > 1:
+            removed = {j: score([i for i in S if i != j]) for j in S if j != c}
+            j = min(removed, key=removed.get)
+            if not removed[j] <= current or (frozenset(set(S) - {j}) in visited and not removed[j] < current):
+                break
+            S, current = [i for i in S if i != j], removed[j]
+            visited.add(frozenset(S))
+            path.append(("remove", j))
+    return path
+
+
+@pytest.mark.parametrize("seed,level,prunes", [(0, 0.0, False), (3, 1e3, True)])
+def test_the_path_is_a_hand_written_simulation_error_pruning(seed, level, prunes):
+    # a noisy tiny problem (no ties): every step of semp's path, adds and removals, as written out by hand
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(-1.0, 1.0, 41), 5)[:200]
+    y = Model(Structure(["y(k-1)", "u(k-1)", "u(k-1)y(k-1)", "1"]), [0.6, 1.0, 0.3, 0.2]).simulate(u, [0.0])
+    y = y + 0.05 * rng.standard_normal(200) + level
+    hand = _semp_by_hand(y, u, 5)
+    assert any(action == "remove" for action, _ in hand) == prunes
+    res = gb.semp(Structure(list(_HAND_TERMS)), Record(u, y), n_terms=5)  # looks on to 8 terms
+    steps = list(zip(res.path["action"], res.path["term"]))
+    assert steps[:len(hand)] == hand
