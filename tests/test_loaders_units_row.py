@@ -149,3 +149,15 @@ def test_a_time_unit_in_another_case_is_refused_as_ambiguous_naming_the_column(t
 def test_a_time_unit_as_written_or_a_word_in_any_case_is_read(tmp_path, unit, Ts):
     f = _write(tmp_path / "run.csv", f"t,speed,p\n{unit},rpm,Pa\n0,1000,2e5\n10,1010,2.01e5\n20,1020,2.02e5\n")
     assert gb.load_record_csv(f, "speed", "p", time="t", units_row=True).Ts == pytest.approx(Ts, rel=1e-12)
+
+
+# 'mSec', 'uSEC' (a lower-case prefix, the word 'sec' in any case, as DAQ exports write it) were refused as ambiguous,
+# though their prefix is as written and the word names no other unit; a capital prefix ('Msec', 'MSEC': mega) still is.
+@pytest.mark.parametrize("unit, Ts", [("mSec", 0.01), ("mSEC", 0.01), ("uSec", 1e-5), ("nSEC", 1e-8)])
+def test_a_prefixed_sec_with_its_prefix_as_written_is_read(tmp_path, unit, Ts):
+    f = _write(tmp_path / "run.csv", f"t,speed,p\n{unit},rpm,Pa\n0,1000,2e5\n10,1010,2.01e5\n20,1020,2.02e5\n")
+    assert gb.load_record_csv(f, "speed", "p", time="t", units_row=True).Ts == pytest.approx(Ts, rel=1e-12)
+    for capital in (unit[0].upper() + unit[1:], unit.upper()):
+        g = _write(tmp_path / "cap.csv", f"t,speed,p\n{capital},rpm,Pa\n0,1000,2e5\n10,1010,2.01e5\n")
+        with pytest.raises(ValueError, match="only by case: ambiguous"):
+            gb.load_record_csv(g, "speed", "p", time="t", units_row=True)

@@ -463,6 +463,8 @@ _TIME_UNITS = {**dict.fromkeys(("", "s", "sec", "secs", "second", "seconds"), (1
 #: megaseconds; ``S`` is siemens, ``H`` henry): read as written only. The words (``sec``, ``min``, ``hours`` …) name
 #: no other unit in any case, and are read in any (``Sec``, ``MIN``).
 _CASED_TIME_UNITS = frozenset({"s", "ms", "msec", "us", "µs", "μs", "usec", "ns", "nsec", "h", "d"})
+#: Of those, a prefix and the word sec: only the prefix's case names another unit ('mSec' is milliseconds, 'Msec' mega).
+_PREFIXED_SEC = frozenset({"msec", "usec", "nsec"})
 
 
 def _time_unit(p: Path, unit: str, col: str) -> tuple[int, int] | None:
@@ -473,6 +475,8 @@ def _time_unit(p: Path, unit: str, col: str) -> tuple[int, int] | None:
     if key in _TIME_UNITS:
         return _TIME_UNITS[key]
     low = key.lower()
+    if low in _PREFIXED_SEC and key[0] == low[0]:  # the prefix as written, 'sec' a word read in any case
+        return _TIME_UNITS[low]
     if low in _CASED_TIME_UNITS:
         raise ValueError(f"{p}: the time column {col!r} is given the unit {unit!r}, which differs from {low!r} only by "
                          "case: ambiguous, as a unit's case is part of its name ('Ms' and 'MS' are megaseconds, 'S' "
@@ -1205,8 +1209,8 @@ def load_record_csv(
         one each, ``(("rpm", "%"), "Pa")``; a ``units=`` that contradicts it is refused; a time
         column of numbers in ``ms``, ``µs`` (``us``), ``ns``, ``min``, ``h`` or ``d`` is converted to seconds, one
         of dates or clock times must say ``s`` or nothing; a symbol is read in its own case only, ``Ms`` or ``MS``
-        refused as ambiguous, words such as ``Sec`` or ``MIN`` in any). Without it such a line is refused, naming
-        this option.
+        refused as ambiguous, words such as ``Sec`` or ``MIN`` in any, and ``mSec`` as its prefix is written).
+        Without it such a line is refused, naming this option.
         Default False, True for a TOA5 file (where ``False`` is refused).
 
     Returns
