@@ -561,6 +561,19 @@ def test_a_row_whose_model_diverges_from_a_held_start_is_not_chosen_unless_every
     assert _choose(table.assign(wanders=True), scores, _equal(scores), "one-se")[0] == plain
 
 
+def test_the_min_jsf_fallback_leaves_out_a_row_that_diverges_from_a_held_start_unless_every_row_does():
+    # was: with no row in the band, fallback='min_jsf' took the smallest J_SF whether or not the row wanders, though
+    # the rule in the band leaves such rows out
+    from graybox.experiments._select import _fallback
+
+    table = pd.DataFrame({"in_band": False, "JS_valid": [1.0, 2.0, 3.0], "JSF": [0.1, 0.5, 0.3],
+                          "wanders": [True, False, False]}, index=["a", "b", "c"])
+    results = [{"jsf": np.array([j]), "blocks": np.ones((1, 2))} for j in table["JSF"]]
+    assert _fallback(table, results, 1e-3, "min_jsf") == 2  # the smallest J_SF of the rows that forget their start
+    assert _fallback(table.assign(wanders=True), results, 1e-3, "min_jsf") == 0  # all wander: as if none did
+    assert _fallback(table.drop(columns="wanders"), results, 1e-3, "min_jsf") == 0
+
+
 def test_wanders_marks_a_model_bounded_only_near_the_records_own_start():
     # y(k) = 0.5 y(k-1) + 0.3 y(k-1)^2 + u(k-1) has a stable equilibrium near 2u and an unstable one near 1.67 for
     # small u: from the record's own start (0) it stays bounded, from the measured output's 95th percentile (3)

@@ -151,7 +151,8 @@ class GrayboxSelection:
         the blocks by the delta method, both rows on the same blocks), ``wanders`` (its model, run free over
         an identification or choosing record's input from the output held at the 5th, 50th or 95th percentile of
         those records' outputs, diverges: it stays bounded only near the records' own starts; such rows are not
-        eligible, unless every in-band row wanders), ``eligible`` (the rule could choose it),
+        eligible, unless every in-band row wanders; nor taken by the fallback, unless every row with a static curve
+        wanders), ``eligible`` (the rule could choose it),
         ``rank`` (1: the choice); with a test
         record also ``JS_test`` (its refitted model's J_S there, counted as ``JS_valid`` is: from
         the candidates' largest lag on, the same samples for every row, so it differs from
@@ -1796,4 +1797,8 @@ def _fallback(table: pd.DataFrame, results: list[dict], band: float | None, fall
     jsf = table["JSF"].to_numpy(float)
     if not np.isfinite(jsf).any():
         raise ValueError("fallback 'min_jsf': no structure has a defined static curve (J_SF = inf everywhere)")
-    return int(np.nanargmin(np.where(np.isfinite(jsf), jsf, np.nan)))
+    ok = np.isfinite(jsf)
+    if "wanders" in table.columns:  # as in the band (_choose): a row that diverges from a held start is left out
+        steady = ok & ~table["wanders"].to_numpy(bool)
+        ok = steady if steady.any() else ok
+    return int(np.nanargmin(np.where(ok, jsf, np.nan)))
