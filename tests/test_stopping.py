@@ -46,3 +46,29 @@ def test_rules_cut_short_warn():
                             fraction="f")[0] == 2
     with pytest.raises(ValueError, match="no model of 5 terms"):
         choose_model(stop_rule(5, None, None, curve_default="aic"), sizes, crit, frac, can_grow=True, fraction="f")
+
+
+def test_among_exact_fits_the_criterion_takes_the_fewest_terms():
+    # was: exact search (EBIC) on 10 noise-free rows of y(k) = 0.6 y(k-1) + 0.2 y(k-2) + 0.3 u(k-1) + 0.05 u(k-2)
+    # took those four terms and 1: both fits at the round-off floor, EBIC's ln C(5, k) is smaller for all five
+    # candidates (ln 1) than for four (ln 5) by more than ln N; at y × 1e-300 the constant's round-off θ then
+    # underflowed and frols refused the data
+    sizes, frac = np.array([1, 2, 3, 4, 5]), np.array([4e-2, 6e-4, 1e-4, 1e-27, 1e-27])
+    crit = np.array([-18.6, -57.6, -72.0, -601.0, -601.9])
+    i, why = choose_model(stop_rule(None, None, "ebic", curve_default="bic"), sizes, crit, frac, can_grow=False,
+                          fraction="f", round_off=np.full(5, 1e-27))
+    assert i == 3 and "4 of 5" in why
+    # a smaller model that is not exact is not taken for the exact one (its criterion is larger)
+    assert choose_model(stop_rule(None, None, "ebic", curve_default="bic"), sizes, crit, frac, can_grow=False,
+                        fraction="f", round_off=np.full(5, 1e-28))[0] == 4
+
+
+def test_exact_search_on_few_noise_free_rows_chooses_the_true_terms_in_any_units():
+    import graybox as gb
+
+    true = gb.Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)"])
+    u = np.repeat([1.91, 0.81, 0.12], 5)[:12]
+    y = gb.Model(true, np.array([0.6, 0.2, 0.3, 0.05])).simulate(u, np.zeros(2))
+    for scale in (1.0, 1e-300, 1e300):
+        sel = gb.frols(gb.Candidates(2, 2, degree=1), gb.Record(u, y * scale), search="exact")
+        assert set(map(str, sel.structure.terms)) == set(map(str, true.terms)), scale

@@ -84,8 +84,8 @@ def choose_model(
     ``n_terms``: the model of that size with the smallest criterion (the last one met among
     ties); ``tol``: the fewest terms whose unexplained fraction is at most the tolerance (then
     the smallest criterion, the last met), else the last model, with a warning; ``criterion``:
-    the smallest criterion (the first met among ties), with a warning when it is at the largest
-    size looked at and ``can_grow``.
+    the smallest criterion (the first met among ties; where that model is at its round-off floor, the fewest terms at
+    theirs), with a warning when it is at the largest size looked at and ``can_grow``.
 
     Parameters
     ----------
@@ -154,6 +154,13 @@ def choose_model(
              f"({advice})", RuntimeWarning)
         return last, f"tol {rule.tol:g} not reached in {sizes[last]} terms"
     i = int(np.argmin(crit))
+    floor = np.broadcast_to(np.asarray(round_off, dtype=float), unexplained.shape)
+    exact = unexplained <= floor * (1.0 + 1e-9)
+    if exact[i]:
+        # among exact fits the residual is round-off: the criteria's penalties then compare nothing the data say
+        # (EBIC's ln C(p, k) falls as k nears p), so the fewest terms, then the smallest criterion
+        few = np.flatnonzero(exact & (sizes == sizes[exact].min()))
+        i = int(few[np.argmin(crit[few])])
     largest = int(sizes.max())
     if sizes[i] == largest and can_grow:
         warn(f"{rule.criterion} is smallest at the largest size looked at ({largest} terms): the curve may still be "
