@@ -510,3 +510,22 @@ def test_noise_free_far_from_zero_the_exact_fit_is_told_from_a_near_one(scale):
     assert true <= set(greedy.structure)  # greedy's path took u(k-1)y(k-1) first: it stays, the true terms join it
     _, y = stacked_regressors(exact.structure, rec, start=cand.max_lag)
     assert exact.subset_rss[list(exact.subsets).index(exact.structure)] < 1e-26 * (y @ y)
+
+
+def test_candidates_skipped_on_signals_far_from_zero_name_the_offsets(method="gram"):
+    # y ≈ 1e6 varying by ±1 with noise 1e-3: the Gram form skipped y(k-1), y(k-2) and every y product as
+    # 'proportional to' 1 or another term, saying 'the data cannot tell them from others', and chose no y term at all;
+    # the data tell them apart (noise 1e-3 against a spread of 1): the warning now names the offset and centre=True
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(0.0, 3.0, 120), 5)
+    y = Model(Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)^2", "1"]), [0.6, 0.2, 0.3, 0.05, 0.4]).simulate(
+        u, np.zeros(2))
+    rec = Record(u, y + 1e6 + 1e-3 * rng.standard_normal(u.size))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # BIC at the largest size: not what this test is of
+        with pytest.warns(CandidateWarning, match=r"skipped.*far from zero.*centre=True"):
+            frols(Candidates(2, 2, degree=2), rec, max_terms=6, method=method)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert "y(k-1)" in map(str, frols(Candidates(2, 2, degree=2), rec, max_terms=6, method=method,
+                                          centre=True).structure.terms)

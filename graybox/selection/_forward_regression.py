@@ -800,6 +800,10 @@ def _frols_raw(candidates: Structure, data: object, *, n_terms: int | None, tol:
     said = [f"{len(skipped)} candidate(s) skipped (the data cannot tell them from others): "
             + "; ".join(f"{t} ({why})" for t, why in skipped[:10])
             + ("; …" if len(skipped) > 10 else "")] if skipped else []
+    if skipped and any(why.startswith("proportional") for _, why in skipped):
+        # columns varying little about a far offset look proportional: said as the search's running out is said
+        note = _centring.offset_note(data, process, rank_tol)
+        said[0] += f" ({note})" if note else ""
     n_usable = int(active.sum())
     if n_usable == 0:
         # every rule would look at no model at all: said here, not by the search's empty arrays
