@@ -72,3 +72,16 @@ def test_exact_search_on_few_noise_free_rows_chooses_the_true_terms_in_any_units
     for scale in (1.0, 1e-300, 1e300):
         sel = gb.frols(gb.Candidates(2, 2, degree=1), gb.Record(u, y * scale), search="exact")
         assert set(map(str, sel.structure.terms)) == set(map(str, true.terms)), scale
+
+
+def test_a_model_floored_at_the_whole_output_energy_is_no_exact_fit():
+    # rss_floor gives yᵀy (fraction 1) to a fit whose parameters are too large for any digit of y to survive: such a
+    # model explains nothing, and was taken as an exact fit (tol met at 1 term; the fewest exact terms)
+    sizes, frac = np.array([1, 2, 3]), np.array([1.0, 0.5, 1e-30])
+    floor = np.array([1.0, 1e-28, 1e-28])
+    i, why = choose_model(stop_rule(None, 1e-3, None, curve_default="bic"), sizes, np.array([0.0, -5.0, -60.0]),
+                          frac, can_grow=False, fraction="f", round_off=floor)
+    assert i == 2, why
+    i, why = choose_model(stop_rule(None, None, "bic", curve_default="bic"), sizes, np.array([0.0, -5.0, -60.0]),
+                          frac, can_grow=False, fraction="f", round_off=floor)
+    assert i == 2, why

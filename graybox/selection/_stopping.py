@@ -135,16 +135,15 @@ def choose_model(
         return int(best[-1]), f"n_terms = {rule.n_terms}"
     if rule.mode == "tol":
         # at the floor (to its rounding) the fit is exact: no tolerance asks more (1e-30 of noise-free data)
-        floor = np.broadcast_to(np.asarray(round_off, dtype=float), unexplained.shape)
-        exact = unexplained <= floor * (1.0 + 1e-9)
+        exact = _exact(unexplained, round_off)
         reached = np.flatnonzero((unexplained <= rule.tol) | exact)
         if reached.size:
             # the fewest terms within the tolerance (SEMP's pruning may reach it with fewer after more)
             few = reached[sizes[reached] == sizes[reached].min()]
             i = int(few[crit[few] == crit[few].min()][-1])
+            floor = float(np.broadcast_to(np.asarray(round_off, dtype=float), unexplained.shape)[i])
             return i, (f"{fraction} ≤ {rule.tol:g}" if unexplained[i] <= rule.tol else
-                       f"{fraction} at its round-off floor {floor[i]:.0e} (an exact fit; tol {rule.tol:g} is "
-                       "below it)")
+                       f"{fraction} at its round-off floor {floor:.0e} (an exact fit; tol {rule.tol:g} is below it)")
         last = sizes.size - 1
         # every candidate looked at, or every term the rows allow: a larger max_terms looks at nothing more
         advice = ("raise max_terms or tol" if can_grow else
@@ -154,8 +153,7 @@ def choose_model(
              f"({advice})", RuntimeWarning)
         return last, f"tol {rule.tol:g} not reached in {sizes[last]} terms"
     i = int(np.argmin(crit))
-    floor = np.broadcast_to(np.asarray(round_off, dtype=float), unexplained.shape)
-    exact = unexplained <= floor * (1.0 + 1e-9)
+    exact = _exact(unexplained, round_off)
     if exact[i]:
         # among exact fits the residual is round-off: the criteria's penalties then compare nothing the data say
         # (EBIC's ln C(p, k) falls as k nears p), so the fewest terms, then the smallest criterion
@@ -170,3 +168,10 @@ def choose_model(
              "rows): the model interpolates the record rather than being chosen by the criterion; use a longer "
              "record, fewer candidates, or give n_terms", RuntimeWarning)
     return i, f"{rule.criterion} minimum at {sizes[i]} of {largest} sizes"
+
+
+def _exact(unexplained: np.ndarray, round_off: float | np.ndarray) -> np.ndarray:
+    """(M,) whether each model is at its round-off floor (to its rounding): an exact fit. A floor of 1 (rss_floor's
+    yᵀy: parameters too large for any digit of y to survive) is no exact fit: that model explains nothing."""
+    floor = np.broadcast_to(np.asarray(round_off, dtype=float), unexplained.shape)
+    return (unexplained <= floor * (1.0 + 1e-9)) & (floor < 1.0)
