@@ -233,6 +233,21 @@ def test_quartic_model_equilibria_and_reached_state():
                 assert m.static_curve([ub], y0=e.ybar * (1 + 1e-3))[0] == pytest.approx(e.ybar, rel=1e-12)
 
 
+def test_companion_root_found_when_the_first_newton_step_overshoots():
+    """Degree 6 with roots −16000 … 160000: the top group of the Newton polygon starts the largest root at
+    −c5/c6 ≈ 144000, whose full Newton step overshoots to ≈ 182000 with a larger |F|; that step, refused, left the
+    root unpolished and then dropped as no root (an equilibrium at ȳ = 160000 silently missing)."""
+    roots = [-16000.0, -50.0, -4.0, 8.0, 80.0, 160000.0]
+    c = np.polynomial.polynomial.polyfromroots(roots) * 0.025  # F(ȳ), ascending
+    for many in (1, 5):  # one polynomial alone, and several solved together
+        got = _real_roots_companion(np.repeat(c[:, None, None], many, axis=2))[0]
+        np.testing.assert_allclose(got, np.tile(roots, (many, 1)), rtol=1e-12)
+    # the same through a model: y(k) = F(y(k−1)) + y(k−1), one equilibrium per root, every one listed
+    s = Structure(["1", "y(k-1)"] + [f"y(k-1)^{p}" for p in range(2, 7)])
+    m = Model(s, c + np.eye(7)[1])
+    np.testing.assert_allclose([e.ybar for e in m.equilibria(0.0)], roots, rtol=1e-12)
+
+
 # ---------------------------------------------------------------------------------------------
 # the one stability test
 # ---------------------------------------------------------------------------------------------

@@ -380,17 +380,45 @@ def _roots_one(c: np.ndarray) -> np.ndarray:
         p = cs[::-1] / np.max(np.abs(cs))
         if np.all(np.isfinite(p)):
             z.extend((tau * np.roots(p)).tolist())
-    z = np.array(z, dtype=complex)
-    dc = c[1:] * np.arange(1, c.size)
-    for _ in range(30):  # Newton steps on the whole polynomial, each kept only if it reduces |F|
-        f = np.polynomial.polynomial.polyval(z, c)
-        df = np.polynomial.polynomial.polyval(z, dc)
-        zn = z - np.where(df != 0, f / np.where(df != 0, df, 1.0), 0.0)
-        better = np.abs(np.polynomial.polynomial.polyval(zn, c)) < np.abs(f)
-        z = np.where(better, zn, z)
-        if not better.any():
-            break
+    z = _newton_polish(np.array(z, dtype=complex)[None, :], c[None, :])[0]
     return np.concatenate([np.array(z0, dtype=complex), z])
+
+
+#: Halvings of a Newton step that does not reduce |F| (:func:`_newton_polish`) before the root is left where it is.
+_HALVINGS = 8
+
+
+def _newton_polish(z: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Newton steps on whole polynomials: ``z`` (K, D) complex starting roots (NaN: none) of the rows of ``c``
+    (K, n), each step kept only where it reduces |F|, halved up to :data:`_HALVINGS` times where it does not.
+
+    A start on the convex side of a root far from its group's scale (−c5/c6 ≈ 1.44e5 for the root 1.6e5 of a
+    degree-6 F) overshoots with a full step to a larger |F|; refused outright, it left the root unpolished and then
+    dropped as no root. Half of it lands nearer, and the steps after it converge.
+    """
+    dc = c[:, 1:] * np.arange(1, c.shape[1])
+    with np.errstate(all="ignore"):
+        f = _polyval_rows(z, c)
+        for _ in range(30):
+            df = _polyval_rows(z, dc)
+            step = np.where(df != 0, f / np.where(df != 0, df, 1.0), 0.0)
+            todo = np.isfinite(step) & (step != 0)
+            moved = np.zeros(z.shape, bool)
+            for _ in range(_HALVINGS + 1):
+                rows, cols = np.nonzero(todo)
+                if rows.size == 0:
+                    break
+                zn = z[rows, cols] - step[rows, cols]
+                fn = _polyval_rows(zn[:, None], c[rows])[:, 0]
+                better = np.abs(fn) < np.abs(f[rows, cols])
+                z[rows[better], cols[better]] = zn[better]
+                f[rows[better], cols[better]] = fn[better]
+                moved[rows[better], cols[better]] = True
+                todo[rows[better], cols[better]] = False
+                step = step / 2
+            if not moved.any():
+                break
+    return z
 
 
 def _real_roots_companion(coef: np.ndarray, sizes: np.ndarray | None = None) -> np.ndarray:
@@ -547,16 +575,7 @@ def _roots_batch(c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             with np.errstate(all="ignore"):
                 z[rows[:, None], fill[rows, None] + np.arange(m)] = t[:, None] * w
             fill[rows] += m
-    dc = c[:, 1:] * np.arange(1, n)
-    with np.errstate(all="ignore"):
-        for _ in range(30):  # Newton steps on the whole polynomials, each kept only if it reduces |F|
-            f = _polyval_rows(z, c)
-            df = _polyval_rows(z, dc)
-            zn = z - np.where(df != 0, f / np.where(df != 0, df, 1.0), 0.0)
-            better = np.abs(_polyval_rows(zn, c)) < np.abs(f)
-            z = np.where(better, zn, z)
-            if not better.any():
-                break
+    z = _newton_polish(z, c)
     lo = np.argmax(c != 0, axis=1)  # x^lo divides the polynomial: lo roots at 0
     for k in np.flatnonzero(lo):
         z[k, fill[k]:fill[k] + lo[k]] = 0.0
