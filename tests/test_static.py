@@ -248,6 +248,17 @@ def test_companion_root_found_when_the_first_newton_step_overshoots():
     np.testing.assert_allclose([e.ybar for e in m.equilibria(0.0)], roots, rtol=1e-12)
 
 
+def test_companion_roots_of_one_group_do_not_settle_on_one_root():
+    """Degree 6 with roots −860000, −810000, −710000 in one group of the Newton polygon: Newton's steps from the
+    group's starts took two of them to −810000 and none to −860000 (the equilibrium listed twice, one missing); the
+    simultaneous (Aberth) steps keep each start off the roots the others take."""
+    roots = [-860000.0, -810000.0, -710000.0, 1.0, 27.0, 1660.0]
+    c = np.polynomial.polynomial.polyfromroots(roots)
+    for many in (1, 5):  # one polynomial alone, and several solved together
+        got = _real_roots_companion(np.repeat(c[:, None, None], many, axis=2))[0]
+        np.testing.assert_allclose(got, np.tile(roots, (many, 1)), rtol=1e-12)
+
+
 # ---------------------------------------------------------------------------------------------
 # the one stability test
 # ---------------------------------------------------------------------------------------------

@@ -389,8 +389,9 @@ _HALVINGS = 8
 
 
 def _newton_polish(z: np.ndarray, c: np.ndarray) -> np.ndarray:
-    """Newton steps on whole polynomials: ``z`` (K, D) complex starting roots (NaN: none) of the rows of ``c``
-    (K, n), each step kept only where it reduces |F|, halved up to :data:`_HALVINGS` times where it does not.
+    """Roots of whole polynomials from the starts ``z`` (K, D) complex (NaN: none) of the rows of ``c`` (K, n):
+    simultaneous steps (:func:`_aberth`), then Newton steps, each kept only where it reduces |F|, halved up to
+    :data:`_HALVINGS` times where it does not.
 
     A start on the convex side of a root far from its group's scale (−c5/c6 ≈ 1.44e5 for the root 1.6e5 of a
     degree-6 F) overshoots with a full step to a larger |F|; refused outright, it left the root unpolished and then
@@ -398,13 +399,16 @@ def _newton_polish(z: np.ndarray, c: np.ndarray) -> np.ndarray:
     """
     dc = c[:, 1:] * np.arange(1, c.shape[1])
     with np.errstate(all="ignore"):
+        z = _aberth(z, c, dc)
         f = _polyval_rows(z, c)
         for _ in range(30):
             df = _polyval_rows(z, dc)
             step = np.where(df != 0, f / np.where(df != 0, df, 1.0), 0.0)
             todo = np.isfinite(step) & (step != 0)
             moved = np.zeros(z.shape, bool)
-            for _ in range(_HALVINGS + 1):
+            for h in range(_HALVINGS + 1):
+                if h == 1:  # a refused step of the root's own rounding is no overshoot: it is not halved
+                    todo &= np.abs(step) > 2 * 4 * np.finfo(float).eps * np.abs(z)
                 rows, cols = np.nonzero(todo)
                 if rows.size == 0:
                     break
@@ -419,6 +423,48 @@ def _newton_polish(z: np.ndarray, c: np.ndarray) -> np.ndarray:
             if not moved.any():
                 break
     return z
+
+
+#: Most simultaneous (Ehrlich–Aberth) steps of :func:`_aberth`.
+_ABERTH_STEPS = 50
+
+
+def _aberth(z: np.ndarray, c: np.ndarray, dc: np.ndarray) -> np.ndarray:
+    """Ehrlich–Aberth steps on the starting roots ``z`` (K, D) complex (NaN: none) of the rows of ``c`` (K, n), ``dc``
+    their derivatives' coefficients: each root's Newton step corrected by its distance to the others (those of ``z``
+    and the x^lo factor's zeros), so two starts of one group cannot both settle on one root and leave another unfound
+    (Newton alone did: a degree-6 F with roots near −8.6e5 and −8.1e5 gave −8.1e5 twice). Where the steps leave |F|
+    no smaller than at the start (no convergence), the start is kept, for the guarded Newton steps after it.
+    """
+    lo = np.argmax(c != 0, axis=1).astype(float)[:, None]  # x^lo divides the polynomial: lo roots at 0
+    live = np.isfinite(z)
+    z0 = z.copy()
+    # a real polynomial's steps keep a conjugate pair conjugate, so a pair started off two close real roots could
+    # never split onto them: a small turn of every start breaks the symmetry (the steps bring real roots back)
+    z = z * (1.0 + 1e-3j)
+    D = z.shape[1]
+    other = ~np.eye(D, dtype=bool)[None]
+    eps = np.finfo(float).eps
+    # a row stops once its own steps vanish, whatever the others do: a polynomial solved among many gets the roots
+    # it gets alone (an operating curve's levels solved together or one by one)
+    rows = np.flatnonzero(live.any(axis=1))
+    with np.errstate(all="ignore"):
+        for _ in range(_ABERTH_STEPS):
+            if rows.size == 0:
+                break
+            zr, lv = z[rows], live[rows]
+            N = _polyval_rows(zr, c[rows]) / _polyval_rows(zr, dc[rows])
+            pair = other & lv[:, :, None] & lv[:, None, :]
+            S = np.where(pair, 1.0 / np.where(pair, zr[:, :, None] - zr[:, None, :], 1.0), 0.0).sum(axis=2)
+            S = S + np.where(lo[rows] > 0, lo[rows] / zr, 0.0)
+            w = N / (1.0 - N * S)
+            ok = lv & np.isfinite(w)
+            zr = np.where(ok, zr - np.where(ok, w, 0.0), zr)
+            z[rows] = zr
+            rows = rows[np.any(ok & (np.abs(w) > 4 * eps * np.abs(zr)), axis=1)]
+        # kept only where |F| fell (an F beyond the float range at both, a start left turned, is no fall)
+        better = np.isfinite(z) & (np.abs(_polyval_rows(z, c)) < np.abs(_polyval_rows(z0, c)))
+    return np.where(live & better, z, z0)
 
 
 def _real_roots_companion(coef: np.ndarray, sizes: np.ndarray | None = None) -> np.ndarray:
@@ -486,13 +532,14 @@ def _real_of(z: np.ndarray, c: np.ndarray, a: np.ndarray, D: int) -> np.ndarray:
         f = _polyval_rows(x, c)
         size = np.abs(x)[..., None] ** powers @ np.abs(c)[:, :, None]
         x = np.where(np.isfinite(x) & (np.abs(f) <= 1e-8 * size[..., 0]), x, np.nan)
-        # one of each complex pair (imaginary part > 0): its real part, where F is within the coefficients'
-        # uncertainty there (a double root that rounding of a cancelling coefficient split into the pair)
-        xp = np.where(live & ~real & (z.imag > 0), z.real, np.nan)
+        # each root of a complex pair: its real part, where F is within the coefficients' uncertainty there (a double
+        # root that rounding of a cancelling coefficient split into the pair); the two of a pair are taken one by one,
+        # not one of them twice, as the simultaneous steps leave a pair near the axis nearly, not exactly, conjugate
+        xp = np.where(live & ~real, z.real, np.nan)
         fp = np.abs(_polyval_rows(xp, c))
         eta = ROOT_EPS * eps * (np.abs(xp)[..., None] ** powers @ np.abs(a)[:, :, None])[..., 0]
         xp = np.where(np.isfinite(xp) & np.isfinite(eta) & (fp <= eta), xp, np.nan)
-        x = np.sort(np.concatenate([x, xp, xp], axis=1), axis=1)
+        x = np.sort(np.concatenate([x, xp], axis=1), axis=1)
     out = np.full((c.shape[0], D), np.nan)
     n = min(D, x.shape[1])
     out[:, :n] = x[:, :n]
