@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import graybox as gb
+from graybox.core._regressors import regressor_matrix
 from conftest import first_order_signals
 
 
@@ -63,12 +64,18 @@ def test_a_tolerance_on_a_short_record_looks_at_the_sizes_its_rows_carry(search)
 
 def test_the_subset_rss_floor_is_the_one_the_selection_docstring_states():
     # noise-free data: the best subset of 2 terms fits exactly, and its RSS is the round-off floor the
-    # docstring names (it said 1e-13 yᵀy, from a Gram matrix; the search floors at 1e-20 yᵀy on a QR factor)
+    # docstring names (it said 1e-13 yᵀy, from a Gram matrix; then 1e-20 yᵀy; now an exact fit's measured round-off,
+    # 1e4 eps² (yᵀy + N (Σ|θ_s|)²) with θ_s the parameters of the unit-RMS columns)
     u, y = first_order_signals(200, 0, noise=0.0)
     sel = gb.frols(SPACE, gb.Record(u=u, y=y), n_terms=2, search="exact")
-    yy = float(y[2:] @ y[2:])
-    assert sel.subset_rss[0] / yy == pytest.approx(1e-20)
-    assert "1e-20 yᵀy" in gb.Selection.__doc__
+    L = SPACE.max_lag
+    yy, n = float(y[L:] @ y[L:]), len(y) - L
+    psi = regressor_matrix(sel.structure, u, y, start=L)
+    rms = np.sqrt(np.mean(psi ** 2, axis=0))
+    theta_s = np.linalg.lstsq(psi / rms, y[L:], rcond=None)[0]
+    floor = 1e4 * np.finfo(float).eps ** 2 * (yy + n * np.sum(np.abs(theta_s)) ** 2)
+    assert sel.subset_rss[0] == pytest.approx(floor, rel=1e-6)
+    assert "1e4 eps² (yᵀy + N (Σ|θ_s|)²)" in " ".join(gb.Selection.__doc__.split())
 
 
 def _short_offset_record(n: int) -> gb.Record:

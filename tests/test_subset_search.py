@@ -47,16 +47,18 @@ def test_staircase_two_inputs_exact_finds_what_greedy_and_semp_miss(noise):
     L = TWO_CAND.max_lag
     greedy = frols(TWO_CAND, rec, n_terms=6)
     sem = gb.semp(TWO_CAND, rec, n_terms=6)
-    # the case is a real one: both greedy selectors settle on look-alikes, whose one-step error is
-    # far above the true structure's
-    assert set(greedy.structure) != set(TWO) and set(sem.structure) != set(TWO)
+    # the case is a real one: greedy forward selection settles on look-alikes, whose one-step error is far above the
+    # true structure's; so does semp on noisy data (noise-free, its exchange at the round-off floor now reaches the
+    # true terms: semp62h)
+    assert set(greedy.structure) != set(TWO) and (set(sem.structure) != set(TWO)) == bool(noise)
     shifted = {str(t) for t in greedy.structure} - {str(t) for t in TWO}
     assert any(t.replace("(k-1)", "(k-2)") in {str(x) for x in TWO} or t.replace("(k-2)", "(k-1)") in
                {str(x) for x in TWO} for t in shifted)
     rss_true = one_step_rss(TWO, rec, L)
     gap = 3 if noise else 100  # 1 % output noise bounds the true structure's error from below
     assert one_step_rss(greedy.structure, rec, L) > gap * rss_true
-    assert one_step_rss(sem.structure, rec, L) > gap * rss_true
+    if noise:
+        assert one_step_rss(sem.structure, rec, L) > gap * rss_true
     for search in ("swap", "exact"):
         sel = frols(TWO_CAND, rec, n_terms=6, search=search)
         assert set(sel.structure) == set(TWO) and sel.search == search
