@@ -174,6 +174,13 @@ def _section(doc: str, title: str) -> str | None:
     return None if len(parts) < 2 else re.split(r"\n\w[\w ]*\n-+\n", parts[1])[0]
 
 
+def _entries(body: str) -> set[str]:
+    """The names a numpy section's entries give: one parameter or several ("xlabel, ylabel : str", "*prefix : str")
+    at the start of a line."""
+    return {n.lstrip("*") for line in re.findall(r"^(\*{0,2}\w[\w, *]*?)(?: :|$)", body, re.M)
+            for n in re.split(r",\s*", line)}
+
+
 def test_every_public_function_and_method_has_a_numpy_parameters_section():
     """Public functions take numpy-style docstrings (the project's rule): the API pages list each parameter with
     its type, units and shape from the Parameters section. mse, rrse, fit_percent, parse_term, cluster_map,
@@ -184,10 +191,7 @@ def test_every_public_function_and_method_has_a_numpy_parameters_section():
 
     missing = []
     for qual, (fn, params, _) in sorted(_public_callables().items()):
-        body = _section(inspect.getdoc(fn) or "", "Parameters") or ""
-        # an entry names one parameter or several ("xlabel, ylabel : str", "*prefix : str") at the start of its line
-        named = {n.lstrip("*") for line in re.findall(r"^(\*{0,2}\w[\w, *]*?)(?: :|$)", body, re.M)
-                 for n in re.split(r",\s*", line)}
+        named = _entries(_section(inspect.getdoc(fn) or "", "Parameters") or "")
         if set(params) - named:
             missing.append(f"{qual}: {sorted(set(params) - named)}")
     assert not missing, missing
@@ -215,9 +219,7 @@ def test_every_public_class_names_each_of_its_fields():
             except ValueError:  # an exception or warning with the built-in (*args) constructor
                 continue
             doc = inspect.getdoc(obj) or ""
-            body = "\n".join(_section(doc, title) or "" for title in ("Parameters", "Attributes"))
-            named = {n.lstrip("*") for line in re.findall(r"^(\*{0,2}\w[\w, *]*?)(?: :|$)", body, re.M)
-                     for n in re.split(r",\s*", line)}
+            named = _entries("\n".join(_section(doc, title) or "" for title in ("Parameters", "Attributes")))
             if set(params) - named:
                 missing.append(f"{module.__name__}.{name}: {sorted(set(params) - named)}")
     assert not missing, missing
