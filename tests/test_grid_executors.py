@@ -9,6 +9,7 @@ import signal
 import sqlite3
 import subprocess
 import sys
+import threading
 import time
 from collections import deque
 from functools import partial
@@ -22,6 +23,7 @@ from hypothesis import strategies as st
 
 from graybox import experiments as gx
 from graybox.experiments._cell import run_cell
+from graybox.experiments import _executors
 from graybox.experiments._executors import (BATCH_SECONDS, MAX_BATCH, DaskCluster, ProcessPool, _Batches, _size,
                                             local_cluster, worker_threads)
 
@@ -539,37 +541,129 @@ def test_a_cell_past_the_time_limit_on_dask_is_stopped_and_failed_and_the_others
         os.kill(pid, 0)
 
 
+class _StallingStart:
+    """A cell function whose unpickling hangs, once, in a process started by the process whose pid ``flag`` holds
+    (a Dask worker's child being started: a start-up that never ends, its process alive and silent)."""
+
+    def __init__(self, flag: str):
+        self.flag = flag
+
+    def __call__(self, cell, data, threads):
+        return run_cell(cell, data, threads=threads)
+
+    def __reduce__(self):
+        return _stall_at_start, (self.flag,)
+
+
+def _stall_at_start(flag: str) -> _StallingStart:
+    try:
+        parent = int(Path(flag).read_text())
+    except (OSError, ValueError):
+        parent = None
+    if parent == os.getppid():
+        os.replace(flag, f"{flag}.{os.getpid()}")  # taken: the next start runs; its name says whose it was
+        time.sleep(600)
+    return _StallingStart(flag)
+
+
+def _set_start_limit(seconds: float) -> float:
+    """Set START_LIMIT (where this runs: a Dask worker); the one it replaces."""
+    old, _executors.START_LIMIT = _executors.START_LIMIT, seconds
+    return old
+
+
+@pytest.fixture(scope="module")
+def one_worker_client():
+    """graybox's own LocalCluster of one worker (one thread), and a client of it."""
+    from distributed import Client
+
+    with local_cluster(1) as cluster, Client(cluster) as client:
+        yield client
+
+
+def test_a_dask_workers_child_that_never_starts_up_fails_its_cell_and_the_run_ends(tmp_path, one_worker_client):
+    # was: a task sent its cell (with its data set, more than a pipe holds) to a child that never read it, and waited
+    # for ever: the run hung, its Dask worker alive, the cell neither run nor failed
+    client = one_worker_client
+    cells, data = _death_cells(("CLS",))
+    flag = tmp_path / "stall"
+    (worker,) = client.run(os.getpid).values()
+    (limit,) = client.run(_set_start_limit, 1.0).values()  # on the worker, where its task starts the child
+    try:
+        flag.write_text(str(worker))
+        ex = DaskCluster(client=client, fn=_StallingStart(str(flag)), time_limit=60)
+        rows: list = []
+        run = threading.Thread(target=lambda: rows.extend(ex.run(cells, data)), daemon=True)
+        run.start()
+        run.join(120)
+        assert not run.is_alive(), "the run waited on a child that never started up"
+    finally:
+        client.run(_set_start_limit, limit)
+    (row,) = rows
+    assert row["status"] == "failed"
+    assert "its child process on its Dask worker did not start up within 1 s" in row["message"]
+    assert "retry_failed" in row["message"]
+    (taken,) = tmp_path.glob("stall.*")  # the child that stalled was stopped, not left behind
+    assert _dead(int(taken.suffix[1:]))
+
+
+def test_a_process_start_waits_for_another_threads_start_only_so_long(monkeypatch):
+    # was: a start waited for ever on the start lock another thread's start held (no process started, none failed)
+    monkeypatch.setattr(_executors, "START_LIMIT", 0.2, raising=False)  # (main had none: it waited)
+    pool = ProcessPool(1, run_cell, process="child process")
+    got: list = []
+
+    def start() -> None:
+        try:
+            got.append(pool._start())
+        except RuntimeError as exc:
+            got.append(exc)
+
+    with _executors._START_LOCK:
+        t = threading.Thread(target=start, daemon=True)
+        t.start()
+        t.join(10)
+        waited = t.is_alive()
+    t.join(30)
+    for slot in got:  # (a process started once the lock was let go: stopped)
+        if not isinstance(slot, RuntimeError):
+            ProcessPool._stop(slot, graceful=True)
+    assert not waited, "the start waited for the lock past START_LIMIT"
+    (exc,) = got
+    assert isinstance(exc, RuntimeError)
+    assert "could not start a new child process" in str(exc) and "_START_LOCK" in str(exc) and "0.2 s" in str(exc)
+
+
 def _note_pid(marker_dir: str, cell, data, threads):
     (Path(marker_dir) / f"{cell.key}.{os.getpid()}").touch()
     return run_cell(cell, data, threads=threads)
 
 
-def test_under_a_time_limit_a_dask_workers_child_serves_the_runs_tasks_and_ends_with_the_run(tmp_path):
+def test_under_a_time_limit_a_dask_workers_child_serves_the_runs_tasks_and_ends_with_the_run(tmp_path,
+                                                                                             one_worker_client):
     # a child process per task cost its start-up (2 s) per task: 24 cheap cells took 57 s instead of 4
-    from distributed import Client
-
     cells, data = _death_cells(("LS", "CLS", "PE", "SE"))
-    with local_cluster(1) as cluster, Client(cluster) as client:
-        (worker,) = client.run(os.getpid).values()
-        by_run = []
-        for name in ("a", "b"):  # two runs of the four cells, each in several tasks
-            (tmp_path / name).mkdir()
-            ex = DaskCluster(client=client, fn=partial(_note_pid, str(tmp_path / name)), time_limit=60)
-            assert [r["status"] for r in ex.run(cells, data)] == ["ok"] * 4
-            by_run.append({int(m.suffix[1:]) for m in (tmp_path / name).iterdir()})
-        for pids in by_run:  # one child served every task of a run, and the next run has its own
-            assert len(pids) == 1 and worker not in pids
-        assert by_run[0] != by_run[1]
-        (child,) = by_run[0]
-        deadline = time.monotonic() + 30
-        while time.monotonic() < deadline:  # its run's end closed it (the worker itself lives on)
-            try:
-                os.kill(child, 0)
-            except ProcessLookupError:
-                break
-            time.sleep(0.2)
-        else:
-            pytest.fail("the child kept for a run's tasks outlived the run")
+    client = one_worker_client
+    (worker,) = client.run(os.getpid).values()
+    by_run = []
+    for name in ("a", "b"):  # two runs of the four cells, each in several tasks
+        (tmp_path / name).mkdir()
+        ex = DaskCluster(client=client, fn=partial(_note_pid, str(tmp_path / name)), time_limit=60)
+        assert [r["status"] for r in ex.run(cells, data)] == ["ok"] * 4
+        by_run.append({int(m.suffix[1:]) for m in (tmp_path / name).iterdir()})
+    for pids in by_run:  # one child served every task of a run, and the next run has its own
+        assert len(pids) == 1 and worker not in pids
+    assert by_run[0] != by_run[1]
+    (child,) = by_run[0]
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:  # its run's end closed it (the worker itself lives on)
+        try:
+            os.kill(child, 0)
+        except ProcessLookupError:
+            break
+        time.sleep(0.2)
+    else:
+        pytest.fail("the child kept for a run's tasks outlived the run")
 
 
 _ORPHAN_SCRIPT = """

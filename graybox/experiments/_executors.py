@@ -206,6 +206,14 @@ def _exit_past_callbacks(args) -> None:  # pragma: no cover - runs in the child 
 #: What a pool worker sends when it starts a cell (before its row): the cell's time limit counts from it, not
 #: from the worker's own start-up.
 STARTED = "started"
+#: What a pool worker sends once it has started up and waits for its first cell: only then is it sent one (the first
+#: carries the cell's data set, more than a pipe holds, and a send to a worker that never reads waited for ever).
+READY = "ready"
+#: Seconds a pool worker may go without a word where one is due: from its start to :data:`READY` (Python's start-up
+#: and graybox's imports, seconds), and from a cell's send to :data:`STARTED` (its unpickling, milliseconds); past
+#: them it is stopped and its cell is a failed row saying so, rather than the run waiting on it for ever. Also how
+#: long a start waits for another thread's (``_START_LOCK``).
+START_LIMIT = 120.0
 
 
 def _exit_when_orphaned(parent: int) -> None:  # pragma: no cover - runs in the child process
@@ -217,14 +225,18 @@ def _exit_when_orphaned(parent: int) -> None:  # pragma: no cover - runs in the 
 
 
 def _worker_main(conn, fn: CellFn) -> None:  # pragma: no cover - runs in the child process
-    """A worker process: receive (cell, data or None), say it started, run it, send the row; stop on None, EOF,
-    SIGTERM or the death of the process that started it."""
+    """A worker process: say it is ready; then receive (cell, data or None), say it started, run it, send the row;
+    stop on None, EOF, SIGTERM or the death of the process that started it."""
     # stopped mid-cell (the driver interrupted), exit through Python's clean-up: a killed worker leaves
     # numba's named semaphore behind, for the resource tracker to warn of
     exit_on_sigterm()
     threading.Thread(target=_exit_when_orphaned, args=(os.getppid(),), daemon=True,
                      name="graybox worker's parent watch").start()
     cache: dict[str, gb.Dataset] = {}
+    try:
+        conn.send(READY)
+    except (BrokenPipeError, OSError):
+        return
     while True:
         try:
             msg = conn.recv()
@@ -298,10 +310,16 @@ class _Slot:
     cell: Cell | None = None
     attempt: int = 0
     started: float | None = None  # time.monotonic() when the worker said it started ``cell``
+    ready: bool = False  # the worker said READY: it reads what it is sent (its cell goes then)
+    since: float = field(default_factory=time.monotonic)  # since when a word is due: its start, or its cell's send
 
 
 class ProcessPool:
     """Cells in ``workers`` local processes (spawned), results taken as they complete.
+
+    A worker that goes ``START_LIMIT`` s (120) without the word due from it, after its start or after a cell was sent
+    to it, and without dying (its start-up or its reading of the cell hangs), is stopped and replaced, and the cell is
+    a failed row saying so (not retried): the run never waits on a silent worker for ever.
 
     Parameters
     ----------
@@ -363,8 +381,16 @@ class ProcessPool:
                                  name="graybox-grid-worker")
         # one start at a time: two threads each setting and restoring the variables gave one child the other's
         # restored value, and left the first's in the process's environment
-        with _START_LOCK, _environ(_thread_env(self.threads)), _sigint_ignored(), _children_allowed():
-            proc.start()
+        if not _START_LOCK.acquire(timeout=START_LIMIT):
+            parent.close()
+            child.close()
+            raise RuntimeError(f"could not start a new {self.process}: another thread of this process has held "
+                               f"graybox's process-start lock (_START_LOCK) for {START_LIMIT:g} s (its start hung)")
+        try:
+            with _environ(_thread_env(self.threads)), _sigint_ignored(), _children_allowed():
+                proc.start()
+        finally:
+            _START_LOCK.release()
         child.close()
         return _Slot(proc, parent)
 
@@ -393,18 +419,29 @@ class ProcessPool:
         return True
 
     def _wait(self, busy: Sequence[_Slot]) -> float | None:
-        """How long to wait for a row at most (seconds): until the first busy cell's time limit, if any, and an
-        hour at most (the loop waits again): a wait of more than 2^31 ms is an OverflowError in poll()."""
-        started = [s.started for s in busy if s.started is not None]
-        if self.time_limit is None or not started:
+        """How long to wait for a word at most (seconds): until the first deadline of a busy worker (a word due
+        within ``START_LIMIT``, a started cell's time limit), and an hour at most (the loop waits again): a wait of
+        more than 2^31 ms is an OverflowError in poll()."""
+        due = [s.since + START_LIMIT for s in busy if s.started is None]
+        if self.time_limit is not None:
+            due += [s.started + self.time_limit for s in busy if s.started is not None]
+        if not due:
             return None
-        return min(3600.0, max(0.0, min(started) + self.time_limit - time.monotonic()))
+        return min(3600.0, max(0.0, min(due) - time.monotonic()))
 
     def _overdue(self, slot: _Slot) -> bool:
         """Whether the slot's cell has run past the time limit without a row come back (a row sent just in time
         is not lost: it is read on the next wait)."""
         return (self.time_limit is not None and slot.started is not None
                 and time.monotonic() - slot.started >= self.time_limit and not slot.conn.poll())
+
+    @staticmethod
+    def _silent(slot: _Slot) -> bool:
+        """Whether the slot's worker, given a cell, has gone ``START_LIMIT`` s without the word due from it (READY
+        after its start, STARTED after the cell's send) and without dying: its start-up, or its reading of the cell,
+        hangs (a word sent just in time is read on the next wait)."""
+        return (slot.cell is not None and slot.started is None and time.monotonic() - slot.since >= START_LIMIT
+                and not slot.conn.poll())
 
     def run(self, cells: Sequence[Cell], datasets: Mapping[str, gb.Dataset], log: Log | None = None,
             take: Take | None = None) -> Iterator[dict]:
@@ -428,15 +465,16 @@ class ProcessPool:
                     if not queued:
                         break
                     cell, attempt = queued.popleft()
-                    if not self._send(s, cell, datasets):
+                    if s.ready and not self._send(s, cell, datasets):
                         # the worker died idle (killed between two cells, its row being written): no death of this
-                        # cell's, which goes to a worker started in its place (should that one be dead already, its
-                        # death is seen below, as one while running the cell)
+                        # cell's, which goes to a worker started in its place
                         i = slots.index(s)
                         self._stop(s, graceful=False)
                         slots[i] = s = self._start()
-                        self._send(s, cell, datasets)
+                    # a worker not ready yet (just started) is sent its cell once it says READY
                     s.cell, s.attempt, s.started = cell, attempt, None
+                    if s.ready:
+                        s.since = time.monotonic()
                 busy = [s for s in slots if s.cell is not None]
                 if not busy:  # nothing in flight, none taken, none left to take
                     break
@@ -453,6 +491,12 @@ class ProcessPool:
                     if isinstance(row, str) and row == STARTED:
                         s.started = time.monotonic()
                         continue
+                    if isinstance(row, str) and row == READY:
+                        s.ready, s.since = True, time.monotonic()
+                        # a send that fails (it died just now) is seen on the next wait, as a death while running
+                        # the cell: retried once, so a worker that dies at every start cannot loop for ever
+                        self._send(s, s.cell, datasets)
+                        continue
                     if row is not None:
                         s.cell = None
                         yield row
@@ -468,6 +512,16 @@ class ProcessPool:
                     else:
                         yield failed_row(cell, f"the {self._process_text} died twice while running this cell "
                                                f"(last exit code {code}); it was retried once")
+                for i, s in enumerate(slots):  # no word where one is due: stopped, its cell not retried
+                    if not self._silent(s):
+                        continue
+                    cell, what = s.cell, ("start up" if not s.ready else "take the cell it was sent")
+                    s.proc.terminate()
+                    self._stop(s, graceful=False)
+                    slots[i] = self._start()
+                    yield failed_row(cell, f"its {self._process_text} did not {what} within {START_LIMIT:g} s (it "
+                                           "was stopped and replaced): run it again with retry_failed (graybox grid "
+                                           "run --retry-failed)")
                 for i, s in enumerate(slots):  # past the time limit and still without a row: stopped, not retried
                     if s.cell is None or not self._overdue(s):
                         continue
