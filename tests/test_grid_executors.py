@@ -11,6 +11,7 @@ import subprocess
 import sys
 import threading
 import time
+import traceback
 from collections import deque
 from functools import partial
 from pathlib import Path
@@ -525,16 +526,42 @@ def test_a_cell_past_the_time_limit_is_stopped_and_failed_and_the_others_run(tmp
         os.kill(pid, 0)
 
 
+def _rows_within(limit: float, ex, cells, data) -> list[dict]:
+    """``ex.run(cells, data)``'s rows; a run still going after ``limit`` s fails the test with the stack of every
+    thread of the driver (what it waits on), rather than hang the pytest it runs in and every test after it."""
+    out: dict = {}
+
+    def run() -> None:
+        try:
+            out["rows"] = list(ex.run(cells, data))
+        except BaseException as exc:  # raised again in the test's thread
+            out["exc"] = exc
+
+    t = threading.Thread(target=run, daemon=True, name="the test's run")
+    t.start()
+    t.join(limit)
+    if t.is_alive():
+        frames = sys._current_frames()
+        stacks = "".join(f"--- {th.name}\n" + "".join(traceback.format_stack(frames[th.ident]))
+                         for th in threading.enumerate() if th.ident in frames)
+        pytest.fail(f"the run still went on after {limit:g} s; the driver's threads:\n{stacks}")
+    if "exc" in out:
+        raise out["exc"]
+    return out["rows"]
+
+
 def test_a_cell_past_the_time_limit_on_dask_is_stopped_and_failed_and_the_others_run(tmp_path, reference):
     # was: refused on Dask ("a Dask task's start is not known"), and a hung cell hung its task and the run
     cells, data = _death_cells(("LS", "CLS", "PE"))
     with DaskCluster(workers=1, fn=partial(_hang_on_ls, str(tmp_path)), time_limit=5.0).session() as ex:
-        rows = {r["variant"]: r for r in ex.run(cells, data)}
+        # (once, a fresh clone's suite hung here until its lane was killed: a hang now fails here, saying where)
+        rows = {r["variant"]: r for r in _rows_within(240, ex, cells, data)}
     assert set(rows) == {"LS", "CLS", "PE"}
     assert rows["LS"]["status"] == "failed" and "cell time limit of 5 s" in rows["LS"]["message"]
     ref = reference.set_index("key")
     for v in ("CLS", "PE"):
-        assert rows[v]["status"] == "ok" and rows[v]["JS_valid"] == ref.loc[rows[v]["key"], "JS_valid"]
+        assert rows[v]["status"] == "ok", rows[v]["message"]
+        assert rows[v]["JS_valid"] == ref.loc[rows[v]["key"], "JS_valid"]
     (marker,) = tmp_path.glob("*.*")  # started once, in a child of the Dask worker, not retried
     pid = int(marker.suffix[1:])
     with pytest.raises(ProcessLookupError):  # that child was killed, not left sleeping
@@ -592,11 +619,7 @@ def test_a_dask_workers_child_that_never_starts_up_fails_its_cell_and_the_run_en
     try:
         flag.write_text(str(worker))
         ex = DaskCluster(client=client, fn=_StallingStart(str(flag)), time_limit=60)
-        rows: list = []
-        run = threading.Thread(target=lambda: rows.extend(ex.run(cells, data)), daemon=True)
-        run.start()
-        run.join(120)
-        assert not run.is_alive(), "the run waited on a child that never started up"
+        rows = _rows_within(120, ex, cells, data)  # (on main it waited for ever on the silent child)
     finally:
         client.run(_set_start_limit, limit)
     (row,) = rows
