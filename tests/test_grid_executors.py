@@ -595,7 +595,8 @@ def _stall_at_start(flag: str) -> _StallingStart:
 
 def _set_start_limit(seconds: float) -> float:
     """Set START_LIMIT (where this runs: a Dask worker); the one it replaces."""
-    old, _executors.START_LIMIT = _executors.START_LIMIT, seconds
+    old = getattr(_executors, "START_LIMIT", None)  # (main had none: its run waited for ever)
+    _executors.START_LIMIT = seconds
     return old
 
 
