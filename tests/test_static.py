@@ -616,3 +616,15 @@ def test_dict_levels_as_series_of_other_indexes_are_refused_not_paired_by_positi
     with pytest.raises(ValueError, match=r"different indexes"):
         m.static_curve({"a": a, "b": pd.Series([3.0, 4.0], index=[0, 1])})
     np.testing.assert_array_equal(m.static_curve({"a": a, "b": [3.0, 4.0]}), [14.0, 20.0])  # a sequence: by position
+
+
+def test_a_denominator_below_the_rule_is_no_equilibrium_and_the_reason_names_the_rule():
+    # y = (1 − 1e-10) y(k−1) + 1e-9 u(k−1) has ȳ = 10 ū in exact arithmetic, a stable pole at 1 − 1e-10; its
+    # denominator 1e-10 is below DENOMINATOR_RTOL = 1e-9 of its terms' size (1 + |1 − 1e-10| ≈ 2), which the rule
+    # counts as vanishing. local_model said only "its denominator vanishes", untrue of 1e-10: it names the rule now
+    m = gb.Model(["y(k-1)", "u(k-1)"], [1 - 1e-10, 1e-9])
+    assert abs(1 - (1 - 1e-10)) <= 1e-9 * (1 + (1 - 1e-10))  # the rule's test, computed here
+    assert m.equilibria(1.0) == []
+    lm = gb.local_model(m, 1.0, Ts=1.0)
+    assert lm.status == "no equilibrium"
+    assert "DENOMINATOR_RTOL = 1e-09" in lm.reason and "10⁹ times its numerator" in lm.reason
