@@ -82,6 +82,14 @@ def test_started_on_the_unstable_equilibrium_the_run_does_not_settle():
     assert res.status[0, 0] == NOT_SETTLED
     assert "did not settle" in res.explain(0)[0]
     assert np.all(long_run(TWO_STABLE, 0.0, 0.0) == 0.0)
+    # the reason said "... within 50 time constants of the slowest (one over 200000 samples is not run)", where
+    # no time constant is involved: it names the equilibrium the run starts on, here and through static_curve
+    assert "starts on the unstable equilibrium ȳ = 0" in res.explain(0)[0]
+    assert "time constant" not in res.explain(0)[0]
+    with pytest.raises(ValueError, match="starts on the unstable equilibrium ȳ = 0"):
+        TWO_STABLE.static_curve([0.0], y0=[0.0])
+    # started elsewhere, the same model settles: the phrase is for the start on the equilibrium only
+    assert reached_equilibria(CUBIC, TWO_STABLE.theta[None], [0.0], [0.5]).status[0, 0] == REACHED
 
 
 @st.composite

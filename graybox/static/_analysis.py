@@ -1054,12 +1054,17 @@ class Reached:
         ``SETTLE_MAX_STEPS`` / ``SETTLE_TAUS`` samples per time constant); 5 a continuum of
         equilibria (:func:`continuum`: every output is one, so ū sets no ȳ; none is asymptotically stable);
         6 not evaluated (asked with ``until_failure``: another point of the member is not reached).
+    start_on : ndarray, shape (P, M), optional
+        Where a run did not settle (status 4) because it starts on an unstable equilibrium (y0 one of the
+        static equation's roots, to rounding): that equilibrium (output units), which a run begun on it need not
+        leave; NaN elsewhere. None when not looked for.
     """
 
     ubar: np.ndarray
     y0: np.ndarray
     ybar: np.ndarray
     status: np.ndarray
+    start_on: np.ndarray | None = None
 
     STATUS: ClassVar[tuple[str, ...]] = ("reached", "no equilibrium", "no stable equilibrium", "diverged",
                                          "did not settle", "continuum of equilibria", "not evaluated")
@@ -1088,6 +1093,11 @@ class Reached:
                 why = f"the free run from y0 = {exact_text(y0)} diverged"  # as given: 10005.01 read '10005'
             elif s == SKIPPED:
                 why = "not evaluated (another point is not reached)"
+            elif self.start_on is not None and np.isfinite(self.start_on[member, j]):
+                # no time constant is involved: the run sits on an equilibrium that repels, not on a slow approach
+                why = (f"the free run from y0 = {exact_text(y0)} did not settle on a stable equilibrium: it starts on "
+                       f"the unstable equilibrium ȳ = {exact_text(float(self.start_on[member, j]))} (to rounding), "
+                       "which holds a run begun on it")
             else:
                 why = (f"the free run from y0 = {exact_text(y0)} did not settle on a stable equilibrium within "
                        f"{SETTLE_STEPS} steps, nor within {SETTLE_TAUS} time constants of the slowest (one over "
@@ -1440,6 +1450,7 @@ def reached_equilibria(structure: Structure, thetas: np.ndarray, ubar: np.ndarra
     y0s = np.broadcast_to(y0a, (P, M) if y0a.ndim == 2 else ub.shape).copy()
     finite = np.all(np.isfinite(th), axis=1)
     th_ok = np.where(finite[:, None], th, 0.0)
+    start_on = None  # a rational structure runs nothing: every point is reached or has no stable equilibrium
     if is_rational(structure):
         yb = _rational_roots(structure, th_ok, ub)
         stable = stable_mask(structure, th_ok, ub, yb)
@@ -1447,6 +1458,7 @@ def reached_equilibria(structure: Structure, thetas: np.ndarray, ubar: np.ndarra
         yb = np.where(stable, yb, np.nan)
     else:
         roots, stab = roots_and_stability(structure, th_ok, ub)  # (P, M, D) each
+        start_on = None
         has_root = np.any(np.isfinite(roots), axis=-1)
         status = np.where(has_root, NONE_STABLE, NO_EQUILIBRIUM).astype(np.int8)
         yb = np.full((P, M), np.nan)
@@ -1471,6 +1483,7 @@ def reached_equilibria(structure: Structure, thetas: np.ndarray, ubar: np.ndarra
                                   members=None if failed is None else owner[run // M], failed=failed)
             yb.ravel()[run] = y_run
             status.ravel()[run] = s_run
+            start_on = _unstable_starts(roots, stab, np.broadcast_to(y0s, (P, M)), status)
     # every ȳ an equilibrium: none is reached (a run stays at y0, not drawn to any), and it is said as such.
     # Looked for only where nothing was reached: there the y-coefficient 1 − Σ_y… vanishes, so the local
     # pole is 1 and no equilibrium is stable, let alone reached (most calls reach every point, and the
@@ -1482,7 +1495,20 @@ def reached_equilibria(structure: Structure, thetas: np.ndarray, ubar: np.ndarra
         yb[cont] = np.nan
     status[~finite] = NO_EQUILIBRIUM
     yb[~finite] = np.nan
-    return Reached(ub, y0s, yb, status)
+    return Reached(ub, y0s, yb, status, start_on)
+
+
+def _unstable_starts(roots: np.ndarray, stab: np.ndarray, y0: np.ndarray, status: np.ndarray) -> np.ndarray:
+    """Where a run did not settle and its start y0 is an unstable root (to a few ulps), that root; NaN elsewhere.
+    ``roots``, ``stab`` (P, M, D); ``y0``, ``status`` (P, M). Shape (P, M)."""
+    y = y0[..., None]
+    with np.errstate(invalid="ignore"):
+        near = np.abs(roots - y) <= 8 * np.finfo(float).eps * np.maximum(np.abs(y), np.abs(roots))
+    on = ~stab & np.isfinite(roots) & near
+    on &= (status == NOT_SETTLED)[..., None]
+    first = np.argmax(on, axis=-1)
+    hit = np.take_along_axis(roots, first[..., None], axis=-1)[..., 0]
+    return np.where(on.any(axis=-1), hit, np.nan)
 
 
 def point_phrases(phrases: list[str]) -> str:

@@ -336,7 +336,8 @@ def reached_surface(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, 
     y0p = np.broadcast_to(y0s[None, :], (P, M)).reshape(P * M, 1)
     r = _static.reached_equilibria(sk, th.reshape(P * M, T), np.ones(1), y0p, until_failure=until_failure,
                                    members=np.repeat(np.arange(P), M))
-    return Reached(ub, y0s, r.ybar.reshape(P, M), r.status.reshape(P, M))
+    return Reached(ub, y0s, r.ybar.reshape(P, M), r.status.reshape(P, M),
+                   None if r.start_on is None else r.start_on.reshape(P, M))
 
 
 def static_surface(
