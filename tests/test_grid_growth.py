@@ -329,6 +329,19 @@ def test_html_report_is_one_self_contained_page_with_every_figure_and_reason(tro
     assert gb.__version__ in text and "numpy" in text  # the environment
 
 
+def test_html_report_says_a_band_as_its_reasons_do(base_store):
+    # B = 0.175² = 0.030625 (0.030624999999999996 in binary) read "0.03062" in the leaderboard's band column while
+    # the reason in the same row said "B = 0.030625": the column now says it as the reasons do (bound_text)
+    from graybox.experiments._html import report_page
+    df = gx.load_results(base_store)
+    lb = gx.leaderboard(df, band=0.175 ** 2)
+    assert any("B = 0.030625" in r for r in lb["reason"])  # the reasons' figure, and a row that has one
+    page = report_page(df, lb, rule="dsf_valid", summary=[], figures={})
+    board = page.split('id="leaderboard"', 1)[1].split('id="figures"', 1)[0]
+    cells = re.findall(r"<td>(0\.0306[0-9]*)</td>", board)
+    assert len(cells) == len(lb) and set(cells) == {"0.030625"}
+
+
 def test_cli_status_report_html_and_growth(tmp_path, capsys, monkeypatch, base_store):
     monkeypatch.chdir(tmp_path)
     path = copy_of(base_store, tmp_path)

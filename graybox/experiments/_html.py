@@ -14,7 +14,7 @@ from typing import Mapping, Sequence
 
 import pandas as pd
 
-from ..core._reprs import apart_digits, squared_unit
+from ..core._reprs import apart_digits, bound_text, squared_unit
 from ._cell import STATUSES
 from ._store import held_text, output_units
 
@@ -54,18 +54,31 @@ def _num(v: object, digits: int = 4) -> str:
     return _e(v)
 
 
+def _band(b: object, jsf: object, digits: int) -> str:
+    """A band B as the reasons say it (:func:`~graybox.core._reprs.bound_text` beside the row's J_SF), with at least
+    the ``digits`` that tell the column's bands apart."""
+    if _missing(b) or not isinstance(b, float):
+        return _num(b, digits)
+    apart = f"{b:.{digits}g}"
+    said = bound_text(b, None if _missing(jsf) else float(jsf))
+    return _e(said if len(said) > len(apart) else apart)
+
+
 def _table(df: pd.DataFrame, *, index: bool = True, text_cols: Sequence[str] = (), why: str | None = None) -> str:
     """An HTML table (every value escaped); ``why``: a column whose non-empty rows are highlighted."""
     d = df.reset_index() if index else df
     # text: left-aligned and escaped as is; numbers: formatted, a missing one as a dash
     text = [c in text_cols or not pd.api.types.is_numeric_dtype(d[c]) for c in d.columns]
     head = "".join(f'<th class="t">{_e(c)}</th>' if t else f"<th>{_e(c)}</th>" for c, t in zip(d.columns, text))
-    digits = [4 if t or not pd.api.types.is_float_dtype(d[c]) else apart_digits(d[c].to_numpy(float), low=4)
-              for c, t in zip(d.columns, text)]
+    # a band B is said as the reasons say it (bound_text: %g, six digits, or more to keep the row's J_SF on its side):
+    # B = 0.030625 read "0.03062" in its column beside a reason saying 0.030625
+    digits = [4 if t or not pd.api.types.is_float_dtype(d[c]) else
+              apart_digits(d[c].to_numpy(float), low=6 if c == "band" else 4) for c, t in zip(d.columns, text)]
     body = []
     for _, r in d.iterrows():
         cls = ' class="why"' if why is not None and isinstance(r.get(why), str) and r.get(why) else ""
-        cells = "".join(f'<td class="t">{_text(r[c])}</td>' if t else f"<td>{_num(r[c], n)}</td>"
+        cells = "".join(f'<td class="t">{_text(r[c])}</td>' if t else
+                        f"<td>{_band(r[c], r.get('JSF'), n) if c == 'band' else _num(r[c], n)}</td>"
                         for c, t, n in zip(d.columns, text, digits))
         body.append(f"<tr{cls}>{cells}</tr>")
     return f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>"
