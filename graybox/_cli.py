@@ -113,6 +113,11 @@ def _grid(args: argparse.Namespace) -> int:
             print(gx.grid_status(args.store, spec=args.spec).summary())
             return 0
         store = args.store[0] if len(args.store) == 1 else args.store
+        if args.rule == "chosen" and args.band:
+            # the ranking is each cell's own choice, which no band of the report changes: --band only draws
+            print("graybox grid report: note: --band does not change the ranking under --rule chosen (each cell's "
+                  "own choice is ranked as its cell decided it); the figures draw it, and --rule dsf_valid ranks by it",
+                  file=sys.stderr)
         written = gx.write_report(store, args.out, rule=args.rule, band=_bands(args.band), spec=args.spec, html=args.html,
                                   max_structures=args.max_structures)
         print(f"wrote {len(written)} files to {args.out}: {', '.join(p.name for p in written)}")

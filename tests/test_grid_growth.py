@@ -342,6 +342,20 @@ def test_html_report_says_a_band_as_its_reasons_do(base_store):
     assert len(cells) == len(lb) and set(cells) == {"0.030625"}
 
 
+def test_cli_report_says_a_band_given_with_rule_chosen_ranks_nothing(tmp_path, capsys, monkeypatch, base_store):
+    # graybox grid report --rule chosen --band B ranked each cell's own choice, ignoring --band with no word (only the
+    # figures drew it): the command and summary.txt now say so, and the ranking is the one without --band
+    from _reports import undrawn_figures
+    undrawn_figures(monkeypatch)  # the message, summary.txt and leaderboard.csv are read, not the figures
+    common = ["grid", "report", str(base_store), "--rule", "chosen"]
+    assert main([*common, "--out", str(tmp_path / "b"), "--band", "0.01"]) == 0
+    err = capsys.readouterr().err
+    assert "--band does not change the ranking under --rule chosen" in err
+    summary = (tmp_path / "b" / "summary.txt").read_text(encoding="utf-8")
+    assert "the band given, B = 0.01, is drawn on the figures only" in summary
+    assert (tmp_path / "b" / "leaderboard.csv").read_text() == gx.leaderboard(base_store, rule="chosen").to_csv()
+
+
 def test_cli_status_report_html_and_growth(tmp_path, capsys, monkeypatch, base_store):
     monkeypatch.chdir(tmp_path)
     path = copy_of(base_store, tmp_path)

@@ -286,7 +286,9 @@ def leaderboard(
         cell's own choice.
     band : float or mapping data -> float, optional
         The J_SF band B = [0, band] (output units²) for ``"dsf_valid"``; default: each data
-        set's band as stored (also for the data sets a mapping does not name).
+        set's band as stored (also for the data sets a mapping does not name). Under ``"chosen"`` it
+        changes no row (each cell's choice was made by its own decision); :func:`write_report` draws it on
+        the figures and says so in summary.txt.
 
     Returns
     -------
@@ -1061,7 +1063,11 @@ def _summary_lines(df: pd.DataFrame, lb: pd.DataFrame, rule: str, attrs: Mapping
         sub = part.dropna(subset=["JS_valid"]).head(5)
         unit = squared_unit(units.get(d)).strip()
         if rule == "chosen":
-            within = " (each cell's own choice)"
+            # a band given is drawn on the figures, not used here: said, not silently dropped
+            given = _given_band(band, d)
+            within = " (each cell's own choice" + ("" if given is None else
+                                                   f"; the band given, B = {given:g}, is drawn on the figures only, "
+                                                   "it does not change this ranking") + ")"
         else:  # the band that ranked it: given, or stored (the variants' own where their cells stored several)
             bs = _bands(rows, band, d)
             within = (f" among the models with J_SF ≤ B = {bs[0][0]:g}{unit and ' ' + unit}" if len(bs) == 1 else
