@@ -721,6 +721,37 @@ def test_a_cluster_bound_that_names_no_cluster_is_refused_with_the_spec(key):
     gx.Variant("bounded", "cls", constraints=[{"type": "clusters", "bounds": {"Sy": [None, 0.99]}}])
 
 
+_CLUSTER_SPEC = """name = "g"
+[[data]]
+name = "pumping"
+bundled = "pumping"
+[[structures]]
+name = "first"
+terms = ["y(k-1)", "u(k-1)", "1"]
+STRUCTURE
+[[variants]]
+name = "V"
+estimator = "cls"
+constraints = [{type = "clusters", bounds = {NAME = {upper = 1}}}]
+"""
+
+
+def test_a_cluster_bound_no_given_structure_has_is_refused_with_the_spec_naming_the_key_and_line():
+    # was: Sz passed the spec and every cell failed with "no cluster 'Sz' in this structure; it has ['Σ0', 'Σu',
+    # 'Σy']"
+    with pytest.raises(gx.SpecError, match="cluster 'Sz' of variant 'V' is a cluster of no structure") as info:
+        gx.Grid.from_toml_text(_CLUSTER_SPEC.replace("STRUCTURE", "").replace("NAME", "Sz"))
+    assert info.value.path == ("variants", 0, "constraints", 0, "bounds", "Sz") and info.value.line == 12
+    assert "Σ0, Σu, Σy" in str(info.value)
+    gx.Grid.from_toml_text(_CLUSTER_SPEC.replace("STRUCTURE", "").replace("NAME", "Sy"))
+    # a cluster one given structure has and another lacks: a cross the grid may mean, its cells say why
+    fir = '[[structures]]\nname = "fir"\nterms = ["u(k-1)", "1"]'
+    gx.Grid.from_toml_text(_CLUSTER_SPEC.replace("STRUCTURE", fir).replace("NAME", "Sy"))
+    # a structure FROLS makes has its clusters only once made: the name is left to its cells
+    made = '[[structures]]\nname = "made"\ncandidates = {ny = 1, nu = 1, degree = 2}\nn_terms = 3'
+    gx.Grid.from_toml_text(_CLUSTER_SPEC.replace("STRUCTURE", made).replace("NAME", "Sz"))
+
+
 @pytest.mark.parametrize("call, arg, said", [
     ("leaderboard", 42, "results must be a frame"), ("grid_status", None, "store must be a file"),
     ("load_results", 3.5, "store must be a file"), ("write_report", 7, "results must be a frame"),

@@ -1354,6 +1354,47 @@ class Cell:
     __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
 
 
+def _names_a_cluster(structure: StructureSpec, name: str) -> bool:
+    """Does ``name`` name a cluster of a given structure, read as a curve's clusters or a surface's (the data set
+    decides which: a structure of one input on data of several has a surface's)? An ambiguous name is one."""
+    st = gb.parse_structure(list(structure.terms or ()))
+    readings = [lambda: gb.surface_cluster_map(st, input_names=st.input_names)] if st.input_names else []
+    if len(st.input_names) <= 1:
+        readings.append(lambda: gb.cluster_map(st))
+    for read in readings:
+        try:
+            read().index(name)
+            return True
+        except ValueError as e:
+            if not str(e).startswith("no cluster"):  # a name that fits several clusters names clusters
+                return True
+    return False
+
+
+def _check_cluster_names(structures: Sequence[StructureSpec], variants: Sequence["Variant"]) -> None:
+    """A cluster bound naming a cluster no structure of the grid has (Sz) is refused with the spec, where every
+    structure is given (terms): each of its cells would fail with "no cluster 'Sz'". With a structure FROLS makes
+    the clusters are known only once it is made, and a name some given structures have and others lack is a cross
+    the grid may mean: those cells fail with the message, as before."""
+    if any(s.terms is None for s in structures):
+        return
+    for i, v in enumerate(variants):
+        for j, c in enumerate(v.constraints):
+            if c["type"] != "clusters":
+                continue
+            for name in c["bounds"]:
+                if not any(_names_a_cluster(s, name) for s in structures):
+                    have = "; ".join(f"{s.name!r}: {', '.join(_cluster_names(s))}" for s in structures)
+                    raise SpecError(f"cluster {name!r} of variant {v.name!r} is a cluster of no structure of the grid "
+                                    f"(their clusters: {have})", ("variants", i, "constraints", j, "bounds", name))
+
+
+def _cluster_names(structure: StructureSpec) -> list[str]:
+    """The clusters of a given structure, as its cells name them (a curve's, or a surface's with several inputs)."""
+    st = gb.parse_structure(list(structure.terms or ()))
+    return (gb.cluster_map(st) if len(st.input_names) <= 1 else gb.surface_cluster_map(st)).names
+
+
 @dataclass(frozen=True, eq=False)
 class Grid:
     """Data sets × structures × variants × seeds.
@@ -1429,6 +1470,7 @@ class Grid:
                                         "order: one fit (its θ in another order), the same cells; list it once",
                                         (kind, i))
                     seen[key] = (it.name, raw)
+        _check_cluster_names(self.structures, self.variants)
         # what a variant reads from every data set, refused here rather than as a failed cell in every row
         for i, v in enumerate(self.variants):
             nob = [d.name for d in self.data if d.band is None and not _column_uncertainty(d)]
