@@ -264,7 +264,11 @@ def start_beside(items) -> dict:
     tmp = Path(tempfile.mkdtemp(prefix="graybox-beside-"))
     # its own base folder for tmp_path: two sessions cleaning the same pytest-of-<user> folder collide
     with open(tmp / "output", "w") as out:
+        # a test running past faulthandler_timeout dumps every thread's stack into the output, which the suite shows
+        # when this pytest is killed past BESIDE_LIMIT: a hang then says where it waits (a fresh clone's waiting lane
+        # hung twice, 2026-11-29, with nothing but its dots to show)
         proc = subprocess.Popen([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
+                                 "-o", f"faulthandler_timeout={BESIDE_LIMIT // 3}",
                                  f"--basetemp={tmp / 'basetemp'}", f"--junitxml={tmp / 'verdicts.xml'}",
                                  *(item.nodeid for item in items)],
                                 stdout=out, stderr=subprocess.STDOUT, cwd=items[0].config.rootpath,
