@@ -1026,9 +1026,8 @@ NO_EQUILIBRIUM, NONE_STABLE, CONTINUUM = 1, 2, 5
 #: the rule of DENOMINATOR_RTOL, not zero: y = (1 − 1e-10) y(k−1) + 1e-9 u(k−1) has ȳ = 10 ū in exact arithmetic,
 #: but its denominator 1e-10 is below 1e-9 of its terms' size (2), so the rule counts it as none, and says so.
 NO_EQUILIBRIUM_WHY = ("no equilibrium (the static equation has no real root within the float range, or its denominator "
-                      f"vanishes: 1 − Σy − … is at most DENOMINATOR_RTOL = {DENOMINATOR_RTOL:g} times the summed "
-                      "magnitude of its terms, so ȳ would be more than about 10⁹ times its numerator, which the "
-                      "rule treats as no equilibrium)")
+                      f"vanishes: at most DENOMINATOR_RTOL = {DENOMINATOR_RTOL:g} of its terms' size, ȳ over 10⁹ "
+                      "times its numerator)")
 #: Why a point has every output as an equilibrium (:func:`continuum`), in words.
 CONTINUUM_WHY = ("a continuum of equilibria: the static equation holds for every output level, so ȳ is not set by ū "
                  "(an integrator at its balancing input: the output stays where it starts, a marginally stable "
