@@ -971,3 +971,24 @@ def test_a_selection_whose_chosen_row_names_other_terms_is_refused():
         t.iloc[first, t.columns.get_loc(col)] = t.iloc[second][col]
     with pytest.raises(ValueError, match="chosen row's terms .* are not the chosen structure"):
         dataclasses.replace(res, table=t)
+
+
+def test_a_structure_off_by_more_than_round_off_does_not_tie_with_the_exact_one_far_from_zero():
+    # noise-free y(k) = 0.2 + 0.7 y(k-1) + 0.3 u(k-1) + 3e-5 u(k-1)^2 offset by 1e6: the 3-term FROLS row without
+    # u(k-1)^2 runs 2.8e-5 off (2.4e5 ulps, 8e-10 MSE), which the floor 1e-20 of the mean square (1e-8) called
+    # round-off: it tied with the exact 4-term rows and, having fewer terms, was chosen
+    true = gb.Structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"])
+    rng = np.random.default_rng(0)
+    recs = []
+    for _ in range(2):
+        u = np.repeat(rng.uniform(0.0, 2.0, 41), 20)[:800]
+        recs.append(gb.Record(u, gb.simulate(true, np.array([0.2, 0.7, 0.3, 3e-5]), u, np.zeros(1)) + 1e6))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # (the offsets' advice)
+        res = gb.select_graybox(gb.Candidates(3, 3, degree=2), gb.Dataset(*recs), band=np.inf, estimator="ls",
+                                sizes=[3, 4])
+    assert res.chosen["n_terms"] == 4 and "u(k-1)^2" in res.chosen["terms"]
+    t = res.table
+    exact = t[t["n_terms"] == 4]["JS_valid"]
+    assert len(exact) == 2 and exact.nunique() == 1  # exact structures still tie, at the floor
+    assert exact.iloc[0] < 1e-11 < t[t["n_terms"] == 3]["JS_valid"].min()  # (1e-11: the floor is 3.3e-12)

@@ -48,7 +48,7 @@ from ..io._json import register_type
 from ..estimation._prediction_error import pe_members
 from ..models._coerce import static_info, static_points
 from ..selection import _centring
-from ..selection._forward_regression import _RSS_FLOOR
+from ..selection._simulation_error_pruning import free_run_floor
 from ..selection._stopping import FewerTermsError
 from ..static._form_check import carried_degree, static_degree, static_fit_mse, varied_inputs, static_terms
 from ..core._simulation_kernels import encode, record_inputs, simulate_batch
@@ -469,6 +469,10 @@ class _Plan:
     band: float
     lag: int  # the candidates' largest lag: every row's errors are counted from this sample on
     extra: dict = field(default_factory=dict)
+    # the round-off floor of each split's choosing record and of each test record (free_run_floor): one number per
+    # record, whatever the structure, so structures exact to round-off tie
+    floors: tuple = ()
+    test_floors: tuple = ()
 
     @property
     def folds(self) -> bool:
@@ -675,7 +679,9 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks,
         warn_static_range(sp.ubar, list(idents), "static points" if isinstance(given, gb.StaticPoints) else
                           f"the {type(given).__name__}'s domain", **({} if band is not None else
                                                                       {"consequence": unused}))
-    return _Plan(idents, splits, tests, sp, np.inf if band is None else band, L, extra), form
+    floors = tuple(free_run_floor(process, choose) for _, choose, _ in splits)
+    test_floors = () if tests is None else tuple(free_run_floor(process, r) for r in tests)
+    return _Plan(idents, splits, tests, sp, np.inf if band is None else band, L, extra, floors, test_floors), form
 
 
 def _check_output_scale(rec: gb.Record, name: str) -> None:
@@ -1033,14 +1039,15 @@ def _no_fit(job: _Job, st: gb.Structure) -> tuple[np.ndarray, np.ndarray]:
     return np.full((lam.size, len(st)), np.nan), lam
 
 
-def _block_mse(st: gb.Structure, thetas: np.ndarray, rec: gb.Record, edges: np.ndarray) -> np.ndarray:
+def _block_mse(st: gb.Structure, thetas: np.ndarray, rec: gb.Record, edges: np.ndarray, floor: float) -> np.ndarray:
     """(P, B) free-run MSE of each member on each block of ``rec`` (one free run from its first L samples).
 
-    An MSE below the round-off floor (:data:`_RSS_FLOOR` of the scored samples' mean square output) is
-    that floor: on noise-free data exact structures tie there, instead of the one with the least
-    round-off (often the largest) leading the others by orders of magnitude. The floor is the whole
-    record's, not each block's: a block where the output rests at zero (a record that starts at rest)
-    would have none, and the round-off there would rank the exact structures."""
+    An MSE below ``floor``, the record's round-off floor (:func:`free_run_floor`, as :func:`graybox.semp` floors
+    its scores), is that floor: on noise-free data exact structures tie there, instead of the one with the least
+    round-off (often the largest) leading the others by orders of magnitude. (1e-20 of the mean square was far
+    above a free run's round-off: at y near 1e6 a structure 2.8e-5 off tied with the exact one and, having fewer
+    terms, was chosen.) The floor is the whole record's, not each block's: a block where the output rests at zero
+    (a record that starts at rest) would have none, and the round-off there would rank the exact structures."""
     P, B = thetas.shape[0], len(edges) - 1
     out = np.full((P, B), np.inf)
     ok = np.all(np.isfinite(thetas), axis=1)
@@ -1051,7 +1058,6 @@ def _block_mse(st: gb.Structure, thetas: np.ndarray, rec: gb.Record, edges: np.n
     y = simulate_batch(code, thetas[ok], record_inputs(rec, code.input_names), rec.y, max(L, 1), bounded=True)
     with np.errstate(over="ignore", invalid="ignore"):
         e2 = (y - rec.y[None, :]) ** 2
-        floor = _RSS_FLOOR * np.mean(rec.y[edges[0]:edges[-1]] ** 2)
         mse = np.stack([np.maximum(e2[:, a:b].mean(axis=1), floor)
                         for a, b in zip(edges[:-1], edges[1:])], axis=1)
     out[ok] = np.where(np.isfinite(mse), mse, np.inf)
@@ -1158,7 +1164,7 @@ def _score_job(job: _Job) -> dict[str, np.ndarray]:
             else:  # a fold: its own fit (of the structure its own search chose, when searched per fold)
                 fold_st = st if job.fold_terms is None else gb.parse_structure(job.fold_terms[j])
                 th = fit(records, fold_st)[0]
-            blocks.append(_block_mse(fold_st, th, choose, edges))
+            blocks.append(_block_mse(fold_st, th, choose, edges, plan.floors[j]))
             weights.append(np.diff(edges))
         full = full or fit(plan.ident)  # (last: jsf[-1] is its J_SF)
         w = np.concatenate(weights).astype(float)
@@ -1176,7 +1182,8 @@ def _score_job(job: _Job) -> dict[str, np.ndarray]:
 def _test_scores(st: gb.Structure, thetas: np.ndarray, plan: _Plan) -> np.ndarray:
     """(P,) each member's J_S over every test sample (each test record's from the candidates' largest lag on)."""
     n = np.array([len(r) - plan.lag for r in plan.test], float)
-    mse = np.stack([_block_mse(st, thetas, r, np.array([plan.lag, len(r)]))[:, 0] for r in plan.test], axis=1)
+    mse = np.stack([_block_mse(st, thetas, r, np.array([plan.lag, len(r)]), floor)[:, 0]
+                    for r, floor in zip(plan.test, plan.test_floors)], axis=1)
     return mse @ (n / n.sum())
 
 

@@ -205,8 +205,7 @@ class _Scorer:
         # by up to 38 ulps on fast plants; 1e-20 of the mean square (4.5e5 ulps) took a run 3.5e-5 off at y near 1e6
         # (1.6e5 ulps) for an exact one, and scored it 1e-8 for its 1.2e-9
         gain = _amplification(self.R, np.sum(slopes, axis=0) / y.size, self.s, max(len(r) - L for r in records))
-        self.floor = (ROUND_OFF_MS * max(1.0, ROUND_OFF_GAIN * gain / ROUND_OFF_ULPS) ** 2
-                      * max(float(np.mean(y**2)), np.finfo(float).tiny))
+        self.floor = round_off_floor(float(np.mean(y**2)), gain)
 
     def independent(self, d: np.ndarray, cols: np.ndarray, rank_tol: float) -> np.ndarray:
         """Whether columns ``cols``, adding ``d`` (squared norm) beyond the terms before them, are independent of
@@ -301,6 +300,31 @@ def _amplification(R: np.ndarray, slope: np.ndarray, s: np.ndarray, longest: int
         sigma = float(np.nansum(theta / np.where(s > 0, s, 1.0) * slope))
     gap = abs(1.0 - sigma)
     return float(min(max(longest, 1), max(1.0, 1.0 / gap if gap > 0 and math.isfinite(gap) else math.inf)))
+
+
+def round_off_floor(mean_square: float, gain: float) -> float:
+    """The free-run MSE that is round-off, not signal (output units²): (2^13 ulps)² of ``mean_square`` (the scored
+    output's mean square), or (32 ulps × ``gain``, the free run's error amplification)² where that is more."""
+    return (ROUND_OFF_MS * max(1.0, ROUND_OFF_GAIN * gain / ROUND_OFF_ULPS) ** 2
+            * max(mean_square, np.finfo(float).tiny))
+
+
+def free_run_floor(process: Structure, record: Record) -> float:
+    """:func:`round_off_floor` of ``record`` scored from the candidates' largest lag on, its amplification that of
+    the least-squares fit of every candidate of ``process`` on it (as :func:`semp` floors its scores): a number of
+    the data and the candidates, the same for every structure scored on the record, so exact structures tie."""
+    L = process.max_lag
+    code = encode(process)
+    U = input_products(code.fptr, code.fsig, code.flag, code.fpow, record_inputs(record, code.input_names), L)
+    y = record.y[L:]
+    with np.errstate(all="ignore"):  # a product beyond the float range: no amplification read (1)
+        psi = _psi(code, U, record.y, L)
+        slope = _output_slopes(code, U, record.y, L).mean(axis=0)
+    gain = 1.0
+    if np.all(np.isfinite(psi)) and np.all(np.isfinite(slope)) and np.any(y):
+        s = column_scales(psi)
+        gain = _amplification(triangular_factor(psi, y, s), slope, s, y.size)
+    return round_off_floor(float(np.mean(y**2)), gain)
 
 
 def _psi(code, U: np.ndarray, y: np.ndarray, L: int) -> np.ndarray:
