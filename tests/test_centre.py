@@ -178,3 +178,21 @@ def test_centred_selection_on_several_records_gives_a_model_in_their_units():
         assert np.sqrt(np.mean((X @ sel.theta - y) ** 2)) < 0.02 * sy  # the records' noise, 0.01, in their units
         base = base or set(sel.structure)
         assert set(sel.structure) == base
+
+
+def test_centred_rss_of_exact_fits_are_floored_at_the_round_off_of_the_recorded_signals():
+    # noise-free y ≈ 1e6, u ≈ 1e3: the search floors its RSS at 1e4 eps² yᵀy (centred) times the centring's gain, the
+    # ratio of y's mean square as recorded to centred (its digits were rounded at 1e6); the subsets' RSS came
+    # unfloored (3.5e-18) and the closure's refit floored without the gain (5.6e-17), below that round-off
+    true = gb.Structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"])
+    u = np.random.default_rng(0).uniform(0.0, 2.0, 400) + 1e3
+    y = gb.simulate(true, np.array([0.2, 0.7, 0.3, 0.1]), u, np.zeros(1)) + 1e6
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # (candidates the centred data cannot tell apart)
+        sel = gb.frols(gb.Candidates(2, 2, degree=2), gb.Record(u, y), centre=True, search="swap", criterion="bic")
+    rows = y[2:]
+    gain = max(np.mean(rows**2) / np.var(rows), np.mean(u**2) / np.var(u))  # (the pooled signals: near enough)
+    bound = 0.99 * 1e4 * np.finfo(float).eps ** 2 * gain * np.sum((rows - rows.mean()) ** 2)
+    exact = [i for i, S in enumerate(sel.subsets) if set(true) <= set(S)]
+    assert exact and np.all(sel.subset_rss[exact] >= bound)
+    assert sel.rss[-1] >= bound and set(true) <= set(sel.structure)

@@ -25,6 +25,7 @@ from ..core._records import Dataset, Record, StaticPoints, as_records
 from ..core._least_squares import column_scales, rank_tolerance
 from ..core._regressors import stacked_regressors
 from ..core._terms import Structure, Term
+from ._subset_search import rss_floor
 
 
 def signal_offsets(data: object) -> dict[str, float]:
@@ -337,8 +338,11 @@ def affine_map(structure: Structure, offsets: Mapping[str, float]) -> tuple[np.n
     return A, t
 
 
-def least_squares(structure: Structure, records: Record | list[Record], start: int) -> tuple[np.ndarray, float]:
-    """θ and residual sum of squares of ``structure`` fitted by least squares on ``records``.
+def least_squares(structure: Structure, records: Record | list[Record], start: int,
+                  gain: float = 1.0) -> tuple[np.ndarray, float]:
+    """θ and residual sum of squares of ``structure`` fitted by least squares on ``records``, the RSS floored at
+    its round-off (:func:`~graybox.selection._subset_search.rss_floor`, times ``gain``: :func:`round_off_gain` for
+    centred signals), as FROLS floors its own.
 
     Rows start at sample ``start`` of each record (the search's: the candidates' largest lag, at least the
     structure's) and never straddle two records (:func:`~graybox.stacked_regressors`); the columns are scaled to
@@ -348,7 +352,7 @@ def least_squares(structure: Structure, records: Record | list[Record], start: i
     scale = column_scales(X)
     theta = np.linalg.lstsq(X / scale, y, rcond=None)[0] / scale
     r = y - X @ theta
-    return theta, float(r @ r)
+    return theta, max(float(r @ r), rss_floor(float(y @ y), y.size, theta * scale, gain))
 
 
 def stop_note(stop: str, chosen: int, closed: int, offsets: Mapping[str, float],

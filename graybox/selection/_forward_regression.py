@@ -217,7 +217,7 @@ class Selection(Relocked):
     err_evaluated : ndarray, shape (K,)
         ERR of each evaluated term.
     rss : ndarray, shape (K,)
-        Residual sum of squares after 1 … K terms (output units²).
+        Residual sum of squares after 1 … K terms (output units²), floored as :attr:`subset_rss` is.
     criterion : str
         The criterion of :attr:`criterion_curve` (``"aic"``, ``"bic"``, ``"fpe"`` or ``"ebic"``).
     criterion_curve : ndarray, shape (K,)
@@ -242,7 +242,9 @@ class Selection(Relocked):
     subset_rss : ndarray, shape (len(subsets),)
         Their residual sums of squares on the selection rows (output units²), from the triangular
         factor of the scaled candidates beside y: values at an exact fit's round-off are floored at it
-        (1e4 eps² (yᵀy + N (Σ|θ_s|)²), θ_s the parameters of the unit-RMS columns: round-off, not signal).
+        (1e4 eps² (yᵀy + N (Σ|θ_s|)²), θ_s the parameters of the unit-RMS columns: round-off, not signal; with
+        ``centre=True``, of the centred signals, times the largest ratio of a signal's mean square as recorded to
+        centred, whose round-off they keep, as :attr:`rss` is).
     input_names : tuple of str, optional
         The model's inputs, in the column order of an input array (default: as
         :class:`~graybox.Model`'s; :func:`frols` takes the records').
@@ -971,13 +973,16 @@ def _frols_centred(candidates: Structure, data: object, **options) -> Selection:
              CandidateWarning)
     # the closure's own fit on the centred signals: its ERR, RSS and θ, the chosen terms first, on the search's rows
     # (from the candidates' largest lag L: the records from sample L − the closure's largest lag on)
-    fit = frols(closed + candidates.noise, _centring.from_sample(centred, L - closed.max_lag), n_terms=len(closed),
-                include=list(closed), rank_tol=rank_tol, method=options["method"], criterion=sel.criterion)
+    # (its RSS floored as the search's were, times the centring's round-off gain: the signals keep the round-off of
+    # their recorded size)
+    fit = _frols_raw(closed + candidates.noise, _centring.from_sample(centred, L - closed.max_lag),
+                     n_terms=len(closed), tol=None, criterion=sel.criterion, max_terms=None, rank_tol=rank_tol,
+                     include=list(closed), method=options["method"], search="greedy", round_off_gain=gain)
     subsets, subset_rss = (), ()
     if sel.subsets:
         subsets = tuple(_centring.told_apart(_centring.closure(S).process, centred, rank_tol, L)[0]
                         for S in sel.subsets)
-        subset_rss = np.array([_centring.least_squares(S, centred, L)[1] for S in subsets])
+        subset_rss = np.array([_centring.least_squares(S, centred, L, gain)[1] for S in subsets])
     stop = _centring.stop_note(sel.stop, len(sel.structure), len(full), unscaled_levels(offsets, exps), dropped)
     theta = unscaled_theta(_centring.raw_theta(closed, fit.theta, offsets), list(closed), exps)
     refuse_beyond_float_range(list(closed), theta, prefix="frols: ")
