@@ -196,3 +196,21 @@ def test_centred_rss_of_exact_fits_are_floored_at_the_round_off_of_the_recorded_
     exact = [i for i, S in enumerate(sel.subsets) if set(true) <= set(S)]
     assert exact and np.all(sel.subset_rss[exact] >= bound)
     assert sel.rss[-1] >= bound and set(true) <= set(sel.structure)
+
+
+@pytest.mark.parametrize("select", [lambda d: gb.frols(gb.Candidates(3, 3, degree=2), d, centre=True, search="greedy"),
+                                    lambda d: gb.semp(gb.Candidates(2, 2, degree=2), d, centre=True)])
+def test_centred_selection_on_noise_free_data_is_the_same_in_units_1e300_apart(select):
+    # the closure of u(k-2)^2 brings 1 and u(k-2), whose raw parameters are truly 0 and came out of the expansion as
+    # round-off (7e-18): with y × 1e-300 those were 7e-318, no float, and frols and semp refused 'the parameter(s) of
+    # ['1', 'u(k-2)'] are beyond the float range' where y × 1 gave a model
+    u = np.random.default_rng(1).uniform(-1.0, 1.0, 400)
+    rec = gb.Record(u, gb.Model(TRUE, THETA).simulate(u, np.zeros(2)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # (candidates the centred data cannot tell apart)
+        a, b = select(rec), select(replace(rec, y=rec.y * 1e-300))
+    assert list(a.structure) == list(b.structure) and set(TRUE) <= set(a.structure)
+    # θ of a term with j output factors scales by 1e-300 ^ (1 − j)
+    j = np.array([sum(p for s, _, p in t.factors if s == "y") for t in a.structure])
+    ta, tb = np.asarray(a.theta), np.asarray(b.theta)
+    assert np.allclose(tb, ta * 1e-300 ** (1 - j), rtol=1e-9, atol=0)

@@ -355,6 +355,20 @@ def least_squares(structure: Structure, records: Record | list[Record], start: i
     return theta, max(float(r @ r), rss_floor(float(y @ y), y.size, theta * scale, gain))
 
 
+def round_off_zeroed(structure: Structure, theta: np.ndarray, records: Record | list[Record],
+                     start: int) -> np.ndarray:
+    """``theta`` (raw signals, :func:`raw_theta`) with 0 for each term whose part of the output is within the
+    round-off of evaluating the model: |θ_j| rms(x_j) at most n eps Σ_i |θ_i| rms(x_i), x the raw columns from sample
+    ``start`` on, n the terms. Such a θ is cancellation or the fit's round-off, not signal (a closure's divisor
+    whose raw parameter is truly 0 came out 7e-18, a term the search took at round-off 1.8e-16); in units where y
+    is 1e-300 times smaller it is no float (θ 1e-317, refused as beyond the float range where y × 1 was not). A
+    ratio of like quantities: the same terms are zero in any units."""
+    theta = np.asarray(theta, dtype=float)
+    X, _ = stacked_regressors(structure, records, start=start)
+    part = np.abs(theta) * column_scales(X)
+    return np.where(part <= len(structure) * np.finfo(float).eps * np.sum(part), 0.0, theta)
+
+
 def stop_note(stop: str, chosen: int, closed: int, offsets: Mapping[str, float],
               dropped: Sequence[tuple[Term, str]] = ()) -> str:
     """A centred search's ``stop``: the search's own, what it chose on which centred signals, and the closure

@@ -984,7 +984,8 @@ def _frols_centred(candidates: Structure, data: object, **options) -> Selection:
                         for S in sel.subsets)
         subset_rss = np.array([_centring.least_squares(S, centred, L, gain)[1] for S in subsets])
     stop = _centring.stop_note(sel.stop, len(sel.structure), len(full), unscaled_levels(offsets, exps), dropped)
-    theta = unscaled_theta(_centring.raw_theta(closed, fit.theta, offsets), list(closed), exps)
+    theta = _centring.round_off_zeroed(closed, _centring.raw_theta(closed, fit.theta, offsets), data, L)
+    theta = unscaled_theta(theta, list(closed), exps)
     refuse_beyond_float_range(list(closed), theta, prefix="frols: ")
     # the closure's curve in the data's own units, counted as the search chose (the refit includes every term: its
     # EBIC compared no subsets): its first k terms hold min(k, chosen) the search chose, the included ones among them,

@@ -528,8 +528,9 @@ def _semp_centred(candidates: Structure, data: Record | Sequence[Record] | Datas
              "fewer terms, or centre out", RuntimeWarning)
     # the offsets in the data's own units (those of the signals times 2^-e said 'y − 0.436' of a mean of 3.6e180)
     stop = _centring.stop_note(res.stop, len(res.structure), len(full), unscaled_levels(offsets, exps), dropped)
-    return _unscaled(replace(res, structure=closed, theta=frozen(_centring.raw_theta(closed, theta, offsets)),
-                             score=score, stop=stop), exps, given)
+    # (a θ at round-off is 0: in other units it could leave the float range, see round_off_zeroed)
+    theta = _centring.round_off_zeroed(closed, _centring.raw_theta(closed, theta, offsets), data, L)
+    return _unscaled(replace(res, structure=closed, theta=frozen(theta), score=score, stop=stop), exps, given)
 
 
 # --------------------------------------------------------------------------------------
