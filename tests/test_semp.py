@@ -325,3 +325,18 @@ def test_the_path_is_a_hand_written_simulation_error_pruning(seed, level, prunes
     res = gb.semp(Structure(list(_HAND_TERMS)), Record(u, y), n_terms=5)  # looks on to 8 terms
     steps = list(zip(res.path["action"], res.path["term"]))
     assert steps[:len(hand)] == hand
+
+
+@pytest.mark.parametrize("ky, ku", [(1000.0, 1.0), (1.0, 60.0), (1e-3, 1.0 / 7.0)])
+def test_candidates_that_tie_to_round_off_are_taken_in_order_in_any_units(ky, ku):
+    # an input of period 3: beside 1 and u(k-1), u(k-2) and u(k-3) span one space (u(k-1) + u(k-2) + u(k-3) is
+    # constant), so their fits are one model and their scores differ by round-off only; the round-off took u(k-3)
+    # in mlc and u(k-2) with u × 60 (on the bundled plant SEMP's 16 terms differed at y × 1000 and u × 60 by such a
+    # tie, u(k-1)u(k-3) against u(k-2)u(k-3) 1.4e-14 apart, and select_graybox's semp-16 rows with them)
+    u = np.tile([0.3, 1.7, 1.1], 100)
+    y = gb.simulate(gb.Structure(["y(k-1)", "u(k-1)", "u(k-2)", "1"]), np.array([0.5, 1.0, 0.4, 0.2]), u, np.zeros(2))
+    rec = gb.Record(u, y + 0.05 * np.random.default_rng(0).standard_normal(u.size))
+    a, b = (gb.semp(gb.Candidates(1, 3, degree=1), gb.Record(r.u, r.y), n_terms=3, include=["1", "u(k-1)"])
+            for r in (rec, gb.Record(rec.u * ku, rec.y * ky)))
+    assert list(a.structure) == list(b.structure) == list(gb.Structure(["1", "u(k-1)", "u(k-2)"]))
+    assert b.score / ky**2 == pytest.approx(a.score, rel=1e-9)

@@ -66,6 +66,10 @@ ROUND_OFF_ULPS = 2.0**13
 ROUND_OFF_MS = (ROUND_OFF_ULPS * np.finfo(float).eps) ** 2
 #: Ulps of round-off per unit of the free run's error amplification (exact runs erred up to 4 per unit: a margin of 8).
 ROUND_OFF_GAIN = 2.0**5
+#: Scores this close (relative) are one score: the same data in other units scored the candidates of a step 1e-13
+#: apart (relative), and two candidates 1.4e-14 apart (one model: u(k-1)u(k-3) and u(k-2)u(k-3) beside the others
+#: on a staircase) swapped places with y × 1000 and u × 60.
+TIE = ROUND_OFF_ULPS * np.finfo(float).eps
 
 
 @dataclass(frozen=True, eq=False)
@@ -725,9 +729,7 @@ def _add(run: _Search, cands: np.ndarray) -> int | None:
     row[cands] = s_c
     run.fwd.append(row)
     # a candidate whose structure was visited before would re-open a cycle: skip it
-    order = np.argsort(s_c, kind="stable")
-    pick = next((int(i) for i in order
-                 if np.isfinite(s_c[i]) and frozenset(run.current + [int(cands[i])]) not in run.visited), None)
+    pick = _best(s_c, np.array([frozenset(run.current + [int(c)]) not in run.visited for c in cands], bool))
     if pick is None:
         if not run.current or not run.rows:
             raise ValueError("no candidate gives a bounded free run (every one-term extension diverges or is "
@@ -736,6 +738,15 @@ def _add(run: _Search, cands: np.ndarray) -> int | None:
     added = int(cands[pick])
     run.move("add", added, run.current + [added], thetas[pick], float(s_c[pick]))
     return added
+
+
+def _best(scores: np.ndarray, eligible: np.ndarray | None = None) -> int | None:
+    """The first (in the given order) of the finite ``eligible`` scores within :data:`TIE` of their smallest: ties to
+    round-off go by order, not by the round-off, which differs between units. None if there is none."""
+    ok = np.isfinite(scores) if eligible is None else np.isfinite(scores) & eligible
+    if not ok.any():
+        return None
+    return int(np.flatnonzero(ok & (scores <= np.min(scores[ok]) * (1.0 + TIE)))[0])
 
 
 def _exchange(run: _Search) -> bool:
@@ -787,7 +798,9 @@ def _prune(run: _Search, added: int) -> None:
         if not trial:
             break
         s_r = sc.scores(np.array(trial))
-        i = int(np.argmin(s_r))
+        i = _best(s_r)
+        if i is None:
+            break
         if not (np.isfinite(s_r[i]) and s_r[i] <= run.score * (1.0 + opt.prune_tol)):
             break
         nxt = [k for k in run.current if k != removable[i]]
