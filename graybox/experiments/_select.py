@@ -145,7 +145,8 @@ class GrayboxSelection:
         each fold's by the structure of the row's source and size that the fold's own search found,
         fitted on its fit records, where ``terms`` and ``n_terms`` are those of the search on all the
         identification data; every row's errors counted from the candidates' largest lag on, the
-        same samples for all; an error below round-off, 1e-20 of the mean square output, counts as that floor), ``JSF``
+        same samples for all; an error below the record's round-off floor, as :func:`graybox.semp` floors its
+        scores, counts as that floor), ``JSF``
         (its static error, worst fold; NaN without static points), ``in_band``, ``vs_best`` and
         ``vs_best_se`` (log of its J_S over the best row's, and that log ratio's standard error over
         the blocks by the delta method, both rows on the same blocks), ``wanders`` (its model, run free over
@@ -1087,16 +1088,19 @@ def _wanders(jobs: list, results: list[dict], members: list[int], plan: _Plan) -
             continue
         st = gb.parse_structure(job.terms)
         code, start = encode(st), max(st.max_lag, 1)
-        for rec in records:
-            u = record_inputs(rec, code.input_names)
-            for level in levels:
-                y = simulate_batch(code, th, u, np.full(start, level), start, bounded=True)
-                if not np.all(np.isfinite(y)):
-                    out[k] = True
-                    break
-            if out[k]:
-                break
+        out[k] = any(not np.all(np.isfinite(simulate_batch(code, th, record_inputs(rec, code.input_names),
+                                                            np.full(start, level), start, bounded=True)))
+                     for rec in records for level in levels)
     return out
+
+
+def _steady(table: pd.DataFrame, ok: np.ndarray) -> np.ndarray:
+    """The rows of the bool mask ``ok`` whose model does not diverge from a held start (:func:`_wanders`), or ``ok``
+    itself where every one of them does (or the table has no ``wanders``: a loaded older selection)."""
+    if "wanders" not in table.columns:
+        return ok
+    steady = ok & ~table["wanders"].to_numpy(bool)
+    return steady if steady.any() else ok
 
 
 def _jsf(st: gb.Structure, thetas: np.ndarray, sp: gb.StaticPoints | None) -> np.ndarray:
@@ -1302,10 +1306,7 @@ def _choose(table: pd.DataFrame, scores: list[np.ndarray], weights: np.ndarray, 
     """Position of the chosen row among the in-band rows (``table`` gains vs_best, vs_best_se,
     eligible); the rule used. Rows whose ``wanders`` is True are left out, and the best row is the best of the
     others, unless every in-band row wanders."""
-    ok = np.flatnonzero(table["in_band"].to_numpy())
-    if "wanders" in table.columns:  # a model that diverges from a held start is left out, unless every one does
-        steady = ok[~table["wanders"].to_numpy(bool)[ok]]
-        ok = steady if steady.size else ok
+    ok = np.flatnonzero(_steady(table, table["in_band"].to_numpy(bool)))
     js = table["JS_valid"].to_numpy(float)
     best = int(ok[np.argmin(js[ok])])
     vs, se = np.full(len(table), np.nan), np.full(len(table), np.nan)
@@ -1804,8 +1805,4 @@ def _fallback(table: pd.DataFrame, results: list[dict], band: float | None, fall
     jsf = table["JSF"].to_numpy(float)
     if not np.isfinite(jsf).any():
         raise ValueError("fallback 'min_jsf': no structure has a defined static curve (J_SF = inf everywhere)")
-    ok = np.isfinite(jsf)
-    if "wanders" in table.columns:  # as in the band (_choose): a row that diverges from a held start is left out
-        steady = ok & ~table["wanders"].to_numpy(bool)
-        ok = steady if steady.any() else ok
-    return int(np.nanargmin(np.where(ok, jsf, np.nan)))
+    return int(np.nanargmin(np.where(_steady(table, np.isfinite(jsf)), jsf, np.nan)))

@@ -92,11 +92,6 @@ _DEPENDENT = "linear combination of the selected terms"
 #: Candidates shown by default when the criterion has no stopping role.
 _DEFAULT_MAX_TERMS = 50
 
-# The floor of select_graybox's free-run MSE, a fraction of the mean square output (graybox.experiments._select reads
-# it). FROLS's own floor on its residual sums is that of an exact fit's round-off (_subset_search.rss_floor): without
-# one the criterion curve of noise-free data keeps "improving" at round-off and the penalty loses to ln(round-off).
-_RSS_FLOOR = 1e-20
-
 # Columns whose |cos| with an earlier one exceeds 1 − this are the same column up to scale: columns that are (a held
 # input's lags, a two-level input's square and the constant) meet it to the round-off of their sums, ~1e-15. At 1e-10
 # (an angle of 1.4e-5) a lagged output 1e5 times its spread from zero was 'proportional to 1' in the Gram form, which
